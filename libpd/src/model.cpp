@@ -1,0 +1,292 @@
+#include "libpd/model.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+#include <stdexcept>
+
+namespace pd {
+
+namespace {
+
+/// Tolerance for "a particle lies in a region": far below λ, far above round-off.
+double region_tolerance(const ModelSpec& spec) { return 1e-6 * spec.lattice.spacing; }
+
+/// Partial-volume factor of a bond of length r (δ the horizon, λ the spacing).
+/// `linear`: the fraction of the neighbour's cell inside the horizon when the cell is treated as a
+/// slab of thickness λ centred on the neighbour: f = (δ + λ/2 − r)/λ on δ − λ/2 < r ≤ δ + λ/2
+/// (common since Parks et al. 2008, e.g. Madenci & Oterkus 2014 §7).
+double volume_fraction(VolumeCorrection vc, double r, double horizon, double spacing) {
+  if (vc == VolumeCorrection::linear && r > horizon - 0.5 * spacing) {
+    return std::clamp((horizon + 0.5 * spacing - r) / spacing, 0.0, 1.0);
+  }
+  return 1.0;
+}
+
+struct MaterialConstants {
+  double c = 0;
+  double critical_stretch = no_limit;
+  double yield_stretch = no_limit;
+};
+
+std::vector<MaterialConstants> material_constants(const ModelSpec& spec) {
+  std::vector<MaterialConstants> out;
+  const double delta = spec.lattice.horizon();
+  for (const Material& m : spec.materials) {
+    MaterialConstants k;
+    k.c = micromodulus(spec.dimension, m.youngs_modulus, delta) * m.stiffness_factor;
+    if (m.critical_stretch) {
+      k.critical_stretch = *m.critical_stretch;
+    } else if (m.fracture_energy) {
+      k.critical_stretch = critical_stretch_from_fracture_energy(
+          spec.dimension, m.youngs_modulus * m.stiffness_factor, delta, *m.fracture_energy);
+    }
+    if (m.yield_stretch) {
+      k.yield_stretch = *m.yield_stretch;
+    }
+    out.push_back(k);
+  }
+  return out;
+}
+
+/// Family volume of a particle in the bulk of the same lattice: Σ over lattice offsets within the
+/// horizon of V·(volume fraction). Used as V0 by the `volume` surface correction.
+double bulk_family_volume(const ModelSpec& spec) {
+  const double lambda = spec.lattice.spacing;
+  const double delta = spec.lattice.horizon();
+  const double reach = delta * (1.0 + horizon_guard_band);
+  const auto m = static_cast<long long>(std::ceil(spec.lattice.horizon_factor)) + 1;
+  const int dim = spec.dimension.dim;
+  const double v = cell_volume(spec.dimension, lambda);
+  double sum = 0;
+  for (long long k = (dim > 2 ? -m : 0); k <= (dim > 2 ? m : 0); ++k) {
+    for (long long j = (dim > 1 ? -m : 0); j <= (dim > 1 ? m : 0); ++j) {
+      for (long long i = -m; i <= m; ++i) {
+        if (i == 0 && j == 0 && k == 0) {
+          continue;
+        }
+        const double r = lambda * std::sqrt(static_cast<double>(i * i + j * j + k * k));
+        const bool inside = spec.horizon_rule == HorizonRule::inclusive
+                                ? r <= reach
+                                : r < delta * (1.0 - horizon_guard_band);
+        if (inside) {
+          sum += v * volume_fraction(spec.volume_correction, r, delta, lambda);
+        }
+      }
+    }
+  }
+  return sum;
+}
+
+std::vector<std::uint32_t> particles_in(const ParticleSet& ps, const Region& region, int dim,
+                                        double tol) {
+  std::vector<std::uint32_t> out;
+  for (std::size_t i = 0; i < ps.size(); ++i) {
+    if (region.contains(ps.position[i], dim, tol)) {
+      out.push_back(static_cast<std::uint32_t>(i));
+    }
+  }
+  return out;
+}
+
+} // namespace
+
+std::size_t Model::memory_bytes() const {
+  const std::size_t n = size();
+  std::size_t bytes = n * (sizeof(Vec3) + sizeof(double) + 2 * sizeof(std::uint16_t));
+  bytes += family.memory_bytes();
+  bytes += (field.bond_stiffness.size() + field.bond_critical_stretch.size() +
+            field.bond_yield_stretch.size()) *
+           sizeof(double);
+  bytes += state.broken.size() + (state.plastic_stretch.size() + state.damage.size()) * sizeof(double);
+  bytes += density.size() * sizeof(double) + external_force_density.size() * sizeof(double);
+  bytes += constraints.size() * sizeof(Constraint);
+  bytes += 9 * n * sizeof(double); // run state: positions, velocities, forces
+  return bytes;
+}
+
+ModelSizeEstimate estimate_model_size(const ModelSpec& spec) {
+  ModelSizeEstimate e;
+  Region all;
+  for (const BodySpec& b : spec.bodies) {
+    all.boxes.insert(all.boxes.end(), b.region.boxes.begin(), b.region.boxes.end());
+  }
+  e.particles = count_lattice_points(spec.dimension, spec.lattice, all);
+  const double lambda = spec.lattice.spacing;
+  const double family = bulk_family_volume(spec) / cell_volume(spec.dimension, lambda);
+  e.bonds = 0.5 * static_cast<double>(e.particles) * family;
+  const double per_directed = sizeof(std::uint32_t) + sizeof(double) +
+                              (spec.surface_correction != SurfaceCorrection::none ||
+                                       spec.volume_correction != VolumeCorrection::none
+                                   ? sizeof(double)
+                                   : 0) +
+                              (spec.effects.damage ? 1.0 : 0.0) +
+                              (spec.effects.plasticity ? sizeof(double) : 0);
+  e.bytes = static_cast<double>(e.particles) * (sizeof(Vec3) + 14.0 * sizeof(double)) +
+            2.0 * e.bonds * per_directed;
+  return e;
+}
+
+Model build_model(const ModelSpec& spec) {
+  if (spec.materials.empty() || spec.bodies.empty()) {
+    throw std::runtime_error("a model needs at least one material and one body");
+  }
+  if (spec.surface_correction == SurfaceCorrection::energy ||
+      spec.surface_correction == SurfaceCorrection::macek_silling ||
+      spec.volume_correction == VolumeCorrection::exact) {
+    throw std::runtime_error(
+        "this correction is not available yet (surface_correction: none|volume, "
+        "volume_correction: none|linear)");
+  }
+  Model m;
+  m.spec = spec;
+  const int dim = spec.dimension.dim;
+  const double delta = spec.lattice.horizon();
+  const double lambda = spec.lattice.spacing;
+  m.particles = generate_lattice(spec.dimension, spec.lattice, spec.bodies);
+  const std::size_t n = m.particles.size();
+  if (n == 0) {
+    throw std::runtime_error("the bodies contain no lattice particle");
+  }
+  m.family = build_bond_family(m.particles.position, dim, delta, spec.horizon_rule);
+
+  // Effects that follow from the model rather than being declared.
+  m.effects = spec.effects;
+  const std::set<std::uint16_t> used(m.particles.material.begin(), m.particles.material.end());
+  m.effects.per_bond_field = used.size() > 1 || spec.surface_correction != SurfaceCorrection::none ||
+                             spec.volume_correction != VolumeCorrection::none ||
+                             spec.lattice.volume_variation > 0;
+  m.effects.body_force = std::any_of(spec.loads.begin(), spec.loads.end(), [](const LoadSpec& l) {
+    return l.load.kind == BoxRegionLoad::Kind::body;
+  });
+
+  const auto constants = material_constants(spec);
+  m.density.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    m.density[i] = spec.materials[m.particles.material[i]].density;
+  }
+
+  if (!m.effects.per_bond_field) {
+    const MaterialConstants& k = constants[*used.begin()];
+    m.field.stiffness = k.c * m.particles.volume[0];
+    m.field.critical_stretch = k.critical_stretch;
+    m.field.yield_stretch = k.yield_stretch;
+  } else {
+    const std::size_t nb = m.family.directed_bond_count();
+    m.field.bond_stiffness.resize(nb);
+    if (m.effects.damage) {
+      m.field.bond_critical_stretch.resize(nb);
+    }
+    if (m.effects.plasticity) {
+      m.field.bond_yield_stretch.resize(nb);
+    }
+    // Family volumes for the `volume` surface correction.
+    std::vector<double> family_volume;
+    double bulk = 1;
+    if (spec.surface_correction == SurfaceCorrection::volume) {
+      bulk = bulk_family_volume(spec);
+      family_volume.assign(n, 0.0);
+      for (std::size_t i = 0; i < n; ++i) {
+        for (std::size_t k = m.family.offsets[i]; k < m.family.offsets[i + 1]; ++k) {
+          const std::size_t j = m.family.neighbour[k];
+          family_volume[i] += m.particles.volume[j] *
+                              volume_fraction(spec.volume_correction,
+                                              1.0 / m.family.inverse_length[k], delta, lambda);
+        }
+      }
+    }
+    for (std::size_t i = 0; i < n; ++i) {
+      for (std::size_t k = m.family.offsets[i]; k < m.family.offsets[i + 1]; ++k) {
+        const std::size_t j = m.family.neighbour[k];
+        // A bond between two materials takes the weaker one's constants (Miranda §5.2: interface
+        // bonds have the properties of concrete).
+        const MaterialConstants& a = constants[m.particles.material[i]];
+        const MaterialConstants& b = constants[m.particles.material[j]];
+        double factor = volume_fraction(spec.volume_correction, 1.0 / m.family.inverse_length[k],
+                                        delta, lambda);
+        if (spec.surface_correction == SurfaceCorrection::volume) {
+          factor *= 2.0 * bulk / (family_volume[i] + family_volume[j]);
+        }
+        m.field.bond_stiffness[k] = std::min(a.c, b.c) * m.particles.volume[j] * factor;
+        if (m.effects.damage) {
+          m.field.bond_critical_stretch[k] = std::min(a.critical_stretch, b.critical_stretch);
+        }
+        if (m.effects.plasticity) {
+          m.field.bond_yield_stretch[k] = std::min(a.yield_stretch, b.yield_stretch);
+        }
+      }
+    }
+  }
+  if (m.effects.damage) {
+    m.state.broken.assign(m.family.directed_bond_count(), 0);
+    m.state.damage.assign(n, 0.0);
+  }
+  if (m.effects.plasticity) {
+    m.state.plastic_stretch.assign(m.family.directed_bond_count(), 0.0);
+  }
+
+  // Supports: later supports override earlier ones on the same component.
+  const double tol = region_tolerance(spec);
+  std::vector<Constraint> constraints;
+  for (std::size_t s = 0; s < spec.supports.size(); ++s) {
+    const SupportSpec& sup = spec.supports[s];
+    const auto members = particles_in(m.particles, sup.region, dim, tol);
+    if (members.empty()) {
+      throw std::runtime_error("support '" + sup.name + "' holds no particle");
+    }
+    for (std::uint32_t i : members) {
+      for (std::uint8_t c = 0; c < 3; ++c) {
+        if (sup.fixed[c] || sup.prescribed[c]) {
+          constraints.push_back({i, c, sup.prescribed[c] ? sup.displacement[c] : 0.0});
+        }
+      }
+    }
+  }
+  std::stable_sort(constraints.begin(), constraints.end(), [](const Constraint& a, const Constraint& b) {
+    return a.particle != b.particle ? a.particle < b.particle : a.component < b.component;
+  });
+  for (const Constraint& c : constraints) {
+    if (!m.constraints.empty() && m.constraints.back().particle == c.particle &&
+        m.constraints.back().component == c.component) {
+      m.constraints.back() = c;
+    } else {
+      m.constraints.push_back(c);
+    }
+  }
+
+  // Loads become force densities [N/m³]; a resultant is shared in proportion to particle volume.
+  if (!spec.loads.empty()) {
+    m.external_force_density.assign(3 * n, 0.0);
+  }
+  for (const LoadSpec& load : spec.loads) {
+    const auto members = particles_in(m.particles, load.load.region, dim, tol);
+    if (members.empty()) {
+      throw std::runtime_error("load '" + load.name + "' acts on no particle");
+    }
+    double total_volume = 0;
+    for (std::uint32_t i : members) {
+      total_volume += m.particles.volume[i];
+    }
+    for (int c = 0; c < 3; ++c) {
+      double density = 0;
+      switch (load.load.kind) {
+      case BoxRegionLoad::Kind::body:
+        density = load.load.value[c];
+        break;
+      case BoxRegionLoad::Kind::total:
+        density = load.load.value[c] / total_volume;
+        break;
+      case BoxRegionLoad::Kind::per_area:
+      case BoxRegionLoad::Kind::per_length:
+        density = load.load.value[c] * load.load.measure / total_volume;
+        break;
+      }
+      for (std::uint32_t i : members) {
+        m.external_force_density[3 * i + c] += density;
+      }
+    }
+  }
+  return m;
+}
+
+} // namespace pd

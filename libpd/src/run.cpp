@@ -1,0 +1,237 @@
+#include "libpd/run.hpp"
+
+#include "libpd/stable_time_step.hpp"
+
+#include <fmt/format.h>
+
+#include <atomic>
+#include <chrono>
+#include <csignal>
+#include <limits>
+
+namespace pd {
+
+namespace {
+
+std::atomic<bool> interrupt_requested{false};
+
+extern "C" void on_interrupt(int) { interrupt_requested.store(true); }
+
+std::string history_csv(const std::vector<ResolvedProbe>& probes, const ProbeHistory& h) {
+  std::string s = "time";
+  for (const auto& p : probes) {
+    s += "," + p.name;
+  }
+  s += "\n";
+  for (std::size_t r = 0; r < h.time.size(); ++r) {
+    s += fmt::format("{}", h.time[r]);
+    for (double v : h.values[r]) {
+      s += fmt::format(",{}", v);
+    }
+    s += "\n";
+  }
+  return s;
+}
+
+} // namespace
+
+std::vector<ResolvedProbe> resolve_probes(const std::vector<ProbeSpec>& probes, const Model& model) {
+  std::vector<ResolvedProbe> out;
+  const int dim = model.spec.dimension.dim;
+  const double tol = 1e-6 * model.spec.lattice.spacing;
+  for (const ProbeSpec& p : probes) {
+    ResolvedProbe r{p.name, p.component, {}};
+    if (p.kind == ProbeSpec::Kind::point) {
+      // Nearest particle; ties go to the lowest index so the choice is reproducible.
+      double best = std::numeric_limits<double>::max();
+      std::uint32_t arg = 0;
+      for (std::size_t i = 0; i < model.size(); ++i) {
+        double d2 = 0;
+        for (int c = 0; c < 3; ++c) {
+          const double d = model.particles.position[i][c] - p.point[c];
+          d2 += d * d;
+        }
+        if (d2 < best * (1 - 1e-12)) {
+          best = d2;
+          arg = static_cast<std::uint32_t>(i);
+        }
+      }
+      r.particles.push_back(arg);
+    } else {
+      for (std::size_t i = 0; i < model.size(); ++i) {
+        if (p.region.contains(model.particles.position[i], dim, tol)) {
+          r.particles.push_back(static_cast<std::uint32_t>(i));
+        }
+      }
+    }
+    if (r.particles.empty()) {
+      throw std::runtime_error("probe '" + p.name + "' selects no particle");
+    }
+    out.push_back(std::move(r));
+  }
+  return out;
+}
+
+double probe_value(const ResolvedProbe& probe, const Simulation& sim) {
+  double sum = 0;
+  for (std::uint32_t i : probe.particles) {
+    sum += sim.displacement(i, probe.component);
+  }
+  return sum / static_cast<double>(probe.particles.size());
+}
+
+RunOutcome run_scene(const Scene& scene, const RunOptions& options) {
+  using clock = std::chrono::steady_clock;
+  const auto t0 = clock::now();
+  RunOutcome out;
+  Model model = build_model(scene.model);
+  Simulation sim(model, scene.solver, scene.initial);
+  const auto probes = resolve_probes(scene.probes, model);
+  out.setup_seconds = std::chrono::duration<double>(clock::now() - t0).count();
+  out.particles = model.size();
+  out.bonds = model.family.bond_count();
+
+  const auto& dir = options.output_dir;
+  const bool writing = !dir.empty();
+  const bool vtu = writing && options.write_vtu && scene.output.vtu;
+  std::vector<std::pair<double, std::string>> vtu_files;
+  auto write_vtu_frame = [&](const Simulation& s) {
+    const std::string name = fmt::format("particles-{:08d}.vtu", s.state().step);
+    write_vtu(dir / name, s);
+    vtu_files.emplace_back(s.state().time, name);
+    std::string pvd = "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n";
+    for (const auto& [t, f] : vtu_files) {
+      pvd += fmt::format("<DataSet timestep=\"{}\" file=\"{}\"/>\n", t, f);
+    }
+    pvd += "</Collection>\n</VTKFile>\n";
+    write_file_atomically(dir / "particles.pvd", pvd);
+  };
+
+  auto record = [&](const Simulation& s) {
+    out.history.time.push_back(s.state().time);
+    std::vector<double> row;
+    for (const auto& p : probes) {
+      row.push_back(probe_value(p, s));
+    }
+    out.history.values.push_back(std::move(row));
+  };
+
+  const std::size_t history_every = scene.output.history_every;
+  const std::size_t vtu_every = scene.output.vtu_every;
+  auto last_flush = clock::now();
+  auto last_progress = clock::now();
+  const auto run_start = clock::now();
+  const double end_time = scene.solver.end_time.value_or(0.0);
+  if (history_every > 0) {
+    record(sim);
+  }
+  interrupt_requested.store(false);
+  void (*previous)(int) = SIG_DFL;
+  if (options.stop_on_interrupt) {
+    previous = std::signal(SIGINT, on_interrupt);
+  }
+  auto observer = [&](const Simulation& s) {
+    const std::size_t step = s.state().step;
+    if (history_every > 0 && step % history_every == 0) {
+      record(s);
+    }
+    if (vtu && vtu_every > 0 && step % vtu_every == 0) {
+      write_vtu_frame(s);
+    }
+    const auto now = clock::now();
+    // Flush the probe history every few seconds so an interrupted run keeps what it computed.
+    if (writing && history_every > 0 && now - last_flush > std::chrono::seconds(5)) {
+      write_file_atomically(dir / "probes.csv", history_csv(probes, out.history));
+      last_flush = now;
+    }
+    if (options.progress && now - last_progress > std::chrono::milliseconds(500)) {
+      last_progress = now;
+      const double elapsed = std::chrono::duration<double>(now - run_start).count();
+      std::string eta;
+      if (end_time > 0 && s.state().time > 0) {
+        eta = fmt::format(" ({:4.1f} %, ETA {:.0f} s)", 100.0 * s.state().time / end_time,
+                          elapsed * (end_time / s.state().time - 1.0));
+      }
+      fmt::print(stderr, "\r  step {:>9}  t = {:.4g} s{}   ", step, s.state().time, eta);
+    }
+    return !interrupt_requested.load();
+  };
+  out.result = sim.run(observer);
+  if (options.stop_on_interrupt) {
+    std::signal(SIGINT, previous);
+  }
+  if (options.progress) {
+    fmt::print(stderr, "\r{:80}\r", "");
+  }
+  const bool unstable = out.result.status == RunStatus::unstable;
+  if (!unstable) {
+    for (const auto& p : probes) {
+      out.probes[p.name] = probe_value(p, sim);
+    }
+  }
+
+  Json& j = out.summary;
+  j["scene"] = scene.path;
+  j["title"] = scene.title;
+  j["status"] = to_string(out.result.status);
+  if (!out.result.message.empty()) {
+    j["message"] = out.result.message;
+  }
+  j["dimension"] = scene.model.dimension.dim;
+  j["particles"] = out.particles;
+  j["bonds"] = out.bonds;
+  j["bonds_per_particle"] = 2.0 * static_cast<double>(out.bonds) / static_cast<double>(out.particles);
+  j["horizon"] = model.horizon();
+  j["spacing"] = scene.model.lattice.spacing;
+  j["integrator"] = to_string(scene.solver.integrator);
+  j["kernel"] = sim.forces().description();
+  j["effects"] = Json::array_of(model.effects.names());
+  j["steps"] = out.result.steps;
+  j["time"] = out.result.time;
+  j["dt"] = out.result.dt;
+  j["dt_stable"] = out.result.dt_stable;
+  j["force_evaluations"] = out.result.force_evaluations;
+  j["setup_seconds"] = out.setup_seconds;
+  j["wall_seconds"] = out.result.wall_seconds;
+  j["bond_updates"] = static_cast<double>(out.bonds) * static_cast<double>(out.result.force_evaluations);
+  j["bond_updates_per_second"] =
+      bond_updates_per_second(out.bonds, out.result.force_evaluations, out.result.wall_seconds);
+  j["kinetic_energy"] = out.result.kinetic_energy;
+  j["strain_energy"] = out.result.strain_energy;
+  j["residual"] = out.result.residual;
+  j["memory_bytes"] = model.memory_bytes();
+  Json& pj = j["probes"];
+  pj = Json::object();
+  for (const auto& [name, value] : out.probes) {
+    pj[name] = value;
+  }
+  if (!scene.warnings.empty()) {
+    j["warnings"] = Json::array_of(scene.warnings);
+  }
+
+  if (writing) {
+    if (!unstable && vtu) {
+      write_vtu_frame(sim);
+    }
+    if (history_every > 0) {
+      // After an instability the last rows may hold huge (but finite) values: keep only rows that
+      // are finite, so the file never carries NaN or inf.
+      ProbeHistory clean;
+      for (std::size_t r = 0; r < out.history.time.size(); ++r) {
+        bool finite = true;
+        for (double v : out.history.values[r]) {
+          finite = finite && std::isfinite(v);
+        }
+        if (finite) {
+          clean.time.push_back(out.history.time[r]);
+          clean.values.push_back(out.history.values[r]);
+        }
+      }
+      write_file_atomically(dir / "probes.csv", history_csv(probes, clean));
+    }
+    write_file_atomically(dir / "summary.json", j.dump());
+  }
+  return out;
+}
+
+} // namespace pd

@@ -1,0 +1,176 @@
+#include "libpd/simulation.hpp"
+
+#include "libpd/stable_time_step.hpp"
+
+#include <fmt/format.h>
+
+#include <chrono>
+#include <cmath>
+#include <limits>
+
+namespace pd {
+
+std::string to_string(RunStatus status) {
+  switch (status) {
+  case RunStatus::end_time:
+    return "end_time";
+  case RunStatus::converged:
+    return "converged";
+  case RunStatus::max_steps:
+    return "max_steps";
+  case RunStatus::unstable:
+    return "unstable";
+  case RunStatus::interrupted:
+    return "interrupted";
+  }
+  return "?";
+}
+
+Simulation::Simulation(Model& model, const SolverSpec& solver, const InitialSpec& initial)
+    : model_(model), solver_(solver) {
+  const std::size_t n = model.size();
+  state_.position.resize(3 * n);
+  state_.velocity.resize(3 * n);
+  state_.force.assign(3 * n, 0.0);
+  Vec3 lo = model.particles.position.empty() ? Vec3{0, 0, 0} : model.particles.position[0];
+  Vec3 hi = lo;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vec3& x = model.particles.position[i];
+    for (int r = 0; r < 3; ++r) {
+      double u = 0;
+      for (int c = 0; c < 3; ++c) {
+        u += initial.displacement_gradient[r][c] * (x[c] - initial.about[c]);
+      }
+      state_.position[3 * i + r] = x[r] + u;
+      state_.velocity[3 * i + r] = initial.velocity[r];
+      lo[r] = std::min(lo[r], x[r]);
+      hi[r] = std::max(hi[r], x[r]);
+    }
+  }
+  ramp_.ramp_time = solver.ramp_time;
+  apply_constraints(model, ramp_, 0.0, state_.position.data(), state_.velocity.data());
+
+  dt_stable_ = stable_time_step(model);
+  dt_ = solver.dt ? *solver.dt : solver.safety * dt_stable_;
+  if (!(dt_ > 0) || !std::isfinite(dt_)) {
+    throw std::runtime_error(fmt::format(
+        "no usable time step: dt = {} (eq. 31 limit {}); does the model have bonds?", dt_, dt_stable_));
+  }
+  const double diagonal =
+      std::sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
+                (hi[2] - lo[2]) * (hi[2] - lo[2]));
+  const double blowup =
+      solver.blowup_displacement > 0 ? solver.blowup_displacement
+                                     : std::max(diagonal, model.spec.lattice.spacing);
+  blowup_squared_ = blowup * blowup;
+
+  forces_ = make_force_evaluator(model);
+  IntegratorSettings is;
+  is.kind = solver.integrator;
+  is.damping = solver.damping;
+  is.ramp = ramp_;
+  integrator_ = make_integrator(is, model, *forces_);
+}
+
+double Simulation::kinetic_energy() const {
+  double ke = 0;
+  for (std::size_t i = 0; i < model_.size(); ++i) {
+    const double* v = &state_.velocity[3 * i];
+    ke += 0.5 * model_.density[i] * model_.particles.volume[i] * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+  }
+  return ke;
+}
+
+double Simulation::strain_energy() const { return forces_->strain_energy(state_.position.data()); }
+
+double Simulation::relative_residual() const {
+  // Free degrees of freedom carry the out-of-balance force (b + F b_ext)·V; constrained ones carry
+  // reactions, which normalise the residual when no load is applied.
+  const double load = ramp_.factor(state_.time);
+  std::vector<std::uint8_t> constrained(3 * model_.size(), 0);
+  for (const Constraint& c : model_.constraints) {
+    constrained[3 * c.particle + c.component] = 1;
+  }
+  const bool has_loads = !model_.external_force_density.empty();
+  double residual = 0, applied = 0, reactions = 0;
+  for (std::size_t i = 0; i < model_.size(); ++i) {
+    const double vol = model_.particles.volume[i];
+    for (std::size_t c = 0; c < 3; ++c) {
+      const std::size_t dof = 3 * i + c;
+      const double ext = has_loads ? load * model_.external_force_density[dof] * vol : 0.0;
+      const double f = state_.force[dof] * vol + ext;
+      if (constrained[dof]) {
+        reactions += f * f;
+      } else {
+        residual += f * f;
+      }
+      applied += ext * ext;
+    }
+  }
+  const double reference = applied > 0 ? applied : reactions;
+  return reference > 0 ? std::sqrt(residual / reference) : std::sqrt(residual);
+}
+
+RunResult Simulation::run(const Observer& observer) {
+  using clock = std::chrono::steady_clock;
+  const auto start = clock::now();
+  RunResult r;
+  r.dt = dt_;
+  r.dt_stable = dt_stable_;
+  r.residual = std::numeric_limits<double>::quiet_NaN();
+  const std::size_t end_steps =
+      solver_.end_time ? static_cast<std::size_t>(std::ceil(*solver_.end_time / dt_ - 1e-9)) : 0;
+  const std::size_t first_step = state_.step;
+  for (;;) {
+    if (solver_.end_time && state_.step >= end_steps) {
+      r.status = RunStatus::end_time;
+      break;
+    }
+    if (state_.step - first_step >= solver_.max_steps) {
+      r.status = RunStatus::max_steps;
+      break;
+    }
+    const StepReport rep = integrator_->step(state_, dt_);
+    if (!(rep.max_displacement_squared <= blowup_squared_)) {
+      r.status = RunStatus::unstable;
+      const bool finite = std::isfinite(rep.max_displacement_squared);
+      r.message = fmt::format(
+          "run became unstable at step {} (t = {:.6g} s): {}. Δt = {:.6g} s; the stable Δt of "
+          "eq. 31 is {:.6g} s (Δt is {:.3g}× that). Lower solver.dt or solver.safety.",
+          state_.step, state_.time,
+          finite ? fmt::format("a displacement reached {:.3g} m, beyond the blow-up limit {:.3g} m",
+                               std::sqrt(rep.max_displacement_squared), std::sqrt(blowup_squared_))
+                 : std::string("non-finite positions"),
+          dt_, dt_stable_, dt_ / dt_stable_);
+      break;
+    }
+    if (solver_.steady.enabled && state_.step % solver_.steady.check_every == 0 &&
+        state_.time >= solver_.ramp_time) {
+      const double ke = kinetic_energy();
+      const double u = strain_energy();
+      r.residual = relative_residual();
+      if (ke <= solver_.steady.kinetic_tolerance * u && r.residual <= solver_.steady.force_tolerance) {
+        r.status = RunStatus::converged;
+        break;
+      }
+    }
+    if (observer && !observer(*this)) {
+      r.status = RunStatus::interrupted;
+      break;
+    }
+  }
+  r.steps = state_.step;
+  r.time = state_.time;
+  r.force_evaluations = integrator_->force_evaluations();
+  if (r.status != RunStatus::unstable) {
+    r.kinetic_energy = kinetic_energy();
+    r.strain_energy = strain_energy();
+    if (solver_.steady.enabled) {
+      r.residual = relative_residual();
+    }
+  }
+  r.wall_seconds = std::chrono::duration<double>(clock::now() - start).count();
+  return r;
+}
+
+} // namespace pd

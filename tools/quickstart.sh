@@ -1,0 +1,59 @@
+#!/usr/bin/env bash
+# The README's two commands:
+#   bash tools/quickstart.sh report   build everything and run the verification report
+#   bash tools/quickstart.sh test     build everything and run the default test suite
+# Both install missing Debian packages first (idempotent: nothing is installed twice), configure
+# with CMake + Ninja into build/ and build. Run as root on Debian 12 (or with sudo available).
+set -euo pipefail
+
+mode=${1:-}
+case "$mode" in
+  report|test) ;;
+  *) echo "usage: $0 report|test" >&2; exit 64 ;;
+esac
+cd "$(dirname "$0")/.."
+
+packages=(
+  build-essential cmake ninja-build pkg-config git
+  libeigen3-dev libyaml-cpp-dev libcli11-dev libfmt-dev
+  libgtest-dev libgmock-dev libbenchmark-dev
+  libsundials-dev libdeal.ii-dev
+  python3 python3-matplotlib
+)
+if [[ $mode == report ]]; then
+  packages+=(lammps)
+fi
+
+missing=()
+for p in "${packages[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$p")
+  fi
+done
+if ((${#missing[@]})); then
+  echo "== installing ${#missing[@]} Debian packages: ${missing[*]}"
+  sudo=()
+  if [[ $(id -u) -ne 0 ]]; then
+    command -v sudo >/dev/null || { echo "error: run as root (apt-get needs it)" >&2; exit 1; }
+    sudo=(sudo)
+  fi
+  "${sudo[@]}" apt-get update -q
+  DEBIAN_FRONTEND=noninteractive "${sudo[@]}" apt-get install -y -q --no-install-recommends "${missing[@]}"
+fi
+
+echo "== configure and build (build/)"
+cmake --preset default
+cmake --build --preset default
+
+if [[ $mode == test ]]; then
+  echo "== tests (ctest --preset default: everything but the slow labels)"
+  ctest --preset default
+else
+  echo "== verification report (out/)"
+  out=out/verification
+  mkdir -p "$out"
+  status=0
+  build/bin/pd verify -o "$out" || status=$?
+  echo "== results in $out/*.json"
+  exit $status
+fi

@@ -1,0 +1,39 @@
+#include "verification.hpp"
+
+#include "cases.hpp"
+
+#include <cmath>
+#include <cstdlib>
+
+#ifndef PD_SOURCE_SCENES_DIR
+#define PD_SOURCE_SCENES_DIR "verification/scenes"
+#endif
+
+namespace pd::verification {
+
+const std::vector<Case>& all_cases() {
+  static const std::vector<Case> cases = {
+      {"bond-count", "particle and bond counts of Miranda's Models A and B; bonds per particle",
+       run_bond_count},
+      {"bar-vibration", "1D bar released from a uniform strain vs the modal series (period, amplitude)",
+       run_bar_vibration},
+      {"bar-energy", "undamped Verlet bar: energy drift over 10^4 steps at 0.9 x the eq. 31 step",
+       run_bar_energy},
+      {"block-tension", "3D block under 200 MPa: elongation and lateral contraction vs sigma/E",
+       run_block_tension},
+  };
+  return cases;
+}
+
+std::filesystem::path default_scenes_dir() {
+  if (const char* env = std::getenv("PD_SCENES_DIR")) {
+    return env;
+  }
+  return PD_SOURCE_SCENES_DIR;
+}
+
+double relative_error(double value, double reference) {
+  return std::abs(value - reference) / std::abs(reference);
+}
+
+} // namespace pd::verification

@@ -1,0 +1,38 @@
+// Verification cases: runnable documents that compare libpd with closed-form solutions (and, in
+// later cases, deal.II). Each case writes CASE.json with at least
+//   case, quantity, pd, reference {name: value}, error {name: relative error}, gate, passed,
+//   wall_seconds
+// and `pd verify` exits non-zero when a gate fails.
+#pragma once
+
+#include "libpd/output.hpp"
+
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace pd::verification {
+
+struct Context {
+  std::filesystem::path scenes_dir; ///< where the shipped scenes live
+  std::filesystem::path output_dir; ///< where CASE.json and run outputs go
+  bool progress = false;
+};
+
+struct Case {
+  std::string name;
+  std::string summary;
+  /// Returns the case JSON; must set "passed" (bool).
+  std::function<Json(const Context&)> run;
+};
+
+const std::vector<Case>& all_cases();
+
+/// Default scenes folder: $PD_SCENES_DIR, else the source tree's verification/scenes.
+std::filesystem::path default_scenes_dir();
+
+/// Relative error |a − b|/|b|.
+double relative_error(double value, double reference);
+
+} // namespace pd::verification
