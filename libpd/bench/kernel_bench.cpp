@@ -10,7 +10,6 @@
 #include "libpd/model.hpp"
 
 #include <benchmark/benchmark.h>
-
 #include <cmath>
 #include <string>
 
@@ -110,19 +109,26 @@ void Dispatched(benchmark::State& state, pd::StretchKind stretch, bool damage, b
 using K = pd::StretchKind;
 BENCHMARK(HandWrittenElastic)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK_CAPTURE(Dispatched, elastic_exact, K::exact, false, false, false)
-    ->Unit(benchmark::kMillisecond)->UseRealTime();
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 BENCHMARK_CAPTURE(Dispatched, elastic_modified, K::modified, false, false, false)
-    ->Unit(benchmark::kMillisecond)->UseRealTime();
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 BENCHMARK_CAPTURE(Dispatched, elastic_fast, K::fast, false, false, false)
-    ->Unit(benchmark::kMillisecond)->UseRealTime();
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 BENCHMARK_CAPTURE(Dispatched, damage_exact, K::exact, true, false, false)
-    ->Unit(benchmark::kMillisecond)->UseRealTime();
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 BENCHMARK_CAPTURE(Dispatched, plasticity_exact, K::exact, false, true, false)
-    ->Unit(benchmark::kMillisecond)->UseRealTime();
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 BENCHMARK_CAPTURE(Dispatched, per_bond_field_exact, K::exact, false, false, true)
-    ->Unit(benchmark::kMillisecond)->UseRealTime();
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 BENCHMARK_CAPTURE(Dispatched, all_effects_exact, K::exact, true, true, true)
-    ->Unit(benchmark::kMillisecond)->UseRealTime();
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 } // namespace
 

@@ -14,12 +14,11 @@
 #include "verification.hpp"
 
 #include <CLI/CLI.hpp>
-#include <fmt/format.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <fmt/format.h>
 #include <iostream>
 #include <unistd.h>
 
@@ -62,13 +61,14 @@ int cmd_run(const std::string& scene_path, const std::string& out_dir, int threa
   opt.output_dir = out_dir;
   opt.progress = ::isatty(STDERR_FILENO) != 0;
   const pd::RunOutcome out = pd::run_scene(scene, opt);
-  fmt::print("{}: {} particles, {} bonds, {} steps of {:.4g} s (eq. 31 limit {:.4g} s), status {}\n",
-             scene_path, out.particles, out.bonds, out.result.steps, out.result.dt,
-             out.result.dt_stable, pd::to_string(out.result.status));
-  fmt::print("wall {:.3f} s, {:.3g} bond updates/s, {} threads\n", out.result.wall_seconds,
-             pd::bond_updates_per_second(out.bonds, out.result.force_evaluations,
-                                         out.result.wall_seconds),
-             thread_count());
+  fmt::print(
+      "{}: {} particles, {} bonds, {} steps of {:.4g} s (eq. 31 limit {:.4g} s), status {}\n",
+      scene_path, out.particles, out.bonds, out.result.steps, out.result.dt, out.result.dt_stable,
+      pd::to_string(out.result.status));
+  fmt::print(
+      "wall {:.3f} s, {:.3g} bond updates/s, {} threads\n", out.result.wall_seconds,
+      pd::bond_updates_per_second(out.bonds, out.result.force_evaluations, out.result.wall_seconds),
+      thread_count());
   for (const auto& [name, value] : out.probes) {
     fmt::print("  probe {:<20} {:.9g}\n", name, value);
   }
@@ -179,13 +179,14 @@ int cmd_verify(const std::vector<std::string>& names, const std::string& out_dir
     return 0;
   }
   pd::verification::Context ctx;
-  ctx.scenes_dir =
-      scenes_dir.empty() ? pd::verification::default_scenes_dir() : std::filesystem::path(scenes_dir);
+  ctx.scenes_dir = scenes_dir.empty() ? pd::verification::default_scenes_dir()
+                                      : std::filesystem::path(scenes_dir);
   ctx.output_dir = out_dir;
   ctx.progress = ::isatty(STDERR_FILENO) != 0;
   std::vector<const pd::verification::Case*> selected;
   for (const auto& name : names) {
-    auto it = std::find_if(cases.begin(), cases.end(), [&](const auto& c) { return c.name == name; });
+    auto it =
+        std::find_if(cases.begin(), cases.end(), [&](const auto& c) { return c.name == name; });
     if (it == cases.end()) {
       fmt::print(stderr, "error: unknown verification case '{}' (see pd verify --list)\n", name);
       return 1;
@@ -203,12 +204,14 @@ int cmd_verify(const std::vector<std::string>& names, const std::string& out_dir
     std::fflush(stdout);
     const auto t0 = std::chrono::steady_clock::now();
     pd::Json result = c->run(ctx);
-    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const double wall =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     result["wall_seconds"] = wall;
     pd::write_file_atomically(std::filesystem::path(out_dir) / (c->name + ".json"), result.dump());
     const pd::Json* verdict = result.find("passed");
     const bool passed = verdict != nullptr && verdict->boolean().value_or(false);
-    fmt::print("   {} in {:.1f} s -> {}/{}.json\n", passed ? "PASSED" : "FAILED", wall, out_dir, c->name);
+    fmt::print("   {} in {:.1f} s -> {}/{}.json\n", passed ? "PASSED" : "FAILED", wall, out_dir,
+               c->name);
     if (!passed) {
       ++failed;
     }
@@ -226,7 +229,8 @@ int main(int argc, char** argv) {
 
   std::string scene, out_dir = "out";
   bool print_defaults = false;
-  auto* run = app.add_subcommand("run", "Run a scene: writes DIR/summary.json, probes.csv and VTU files");
+  auto* run =
+      app.add_subcommand("run", "Run a scene: writes DIR/summary.json, probes.csv and VTU files");
   run->add_option("scene", scene, "scene file (YAML)");
   run->add_option("-o,--output", out_dir, "output folder")->capture_default_str();
   run->add_option("--threads", threads, "OpenMP threads (default: all)");
@@ -240,7 +244,8 @@ int main(int argc, char** argv) {
   std::size_t steps = 100;
   std::string stretch;
   int repeats = 5;
-  auto* bench = app.add_subcommand("bench", "Force-evaluation throughput (bond updates per second)");
+  auto* bench =
+      app.add_subcommand("bench", "Force-evaluation throughput (bond updates per second)");
   bench->add_option("scene", scene, "scene file (YAML)")->required();
   bench->add_option("--steps", steps, "force evaluations per repeat")->capture_default_str();
   bench->add_option("--repeats", repeats, "repeats; the median is reported")->capture_default_str();
@@ -253,7 +258,8 @@ int main(int argc, char** argv) {
   bool list = false;
   std::string scenes_dir;
   std::string verify_out = "verification-out";
-  auto* verify = app.add_subcommand("verify", "Run verification cases; exit code 2 if a gate fails");
+  auto* verify =
+      app.add_subcommand("verify", "Run verification cases; exit code 2 if a gate fails");
   verify->add_option("cases", cases, "case names (default: all)");
   verify->add_option("-o,--output", verify_out, "output folder")->capture_default_str();
   verify->add_flag("--list", list, "list the cases");

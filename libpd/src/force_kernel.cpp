@@ -110,7 +110,8 @@ std::unique_ptr<ForceEvaluator> make_force_evaluator(Model& m) {
     throw std::logic_error("damage effect without bond state: build the model with build_model");
   }
   if (m.effects.plasticity && m.state.plastic_stretch.size() != m.family.directed_bond_count()) {
-    throw std::logic_error("plasticity effect without bond state: build the model with build_model");
+    throw std::logic_error(
+        "plasticity effect without bond state: build the model with build_model");
   }
   if (m.effects.per_bond_field && !m.field.per_bond()) {
     throw std::logic_error("per-bond field requested but not allocated");

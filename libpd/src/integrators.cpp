@@ -67,8 +67,8 @@ public:
     ++force_evaluations_;
     const double t_new = st.time + dt;
     const double load = ramp_.factor(t_new);
-    const double* ext = model_.external_force_density.empty() ? nullptr
-                                                              : model_.external_force_density.data();
+    const double* ext =
+        model_.external_force_density.empty() ? nullptr : model_.external_force_density.data();
     const auto n = static_cast<std::ptrdiff_t>(model_.size());
     double* y = st.position.data();
     double* v = st.velocity.data();
@@ -91,7 +91,9 @@ public:
     return displacement_report(model_, y);
   }
 
-  std::string name() const override { return name_; }
+  std::string name() const override {
+    return name_;
+  }
 
 private:
   Model& model_;
@@ -132,12 +134,14 @@ public:
     return displacement_report(model_, y);
   }
 
-  std::string name() const override { return "verlet"; }
+  std::string name() const override {
+    return "verlet";
+  }
 
 private:
   void kick(State& st, double h, double load) {
-    const double* ext = model_.external_force_density.empty() ? nullptr
-                                                              : model_.external_force_density.data();
+    const double* ext =
+        model_.external_force_density.empty() ? nullptr : model_.external_force_density.data();
     const auto n = static_cast<std::ptrdiff_t>(model_.size());
     double* v = st.velocity.data();
     const double* b = st.force.data();

@@ -3,8 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <random>
-#include <tuple>
 #include <stdexcept>
+#include <tuple>
 #include <unordered_set>
 
 namespace pd {
@@ -54,7 +54,8 @@ void for_each_lattice_point(const ModelDimension& d, const LatticeSpec& l, const
                             Visit&& visit) {
   std::array<std::pair<long long, long long>, 3> r{};
   for (int a = 0; a < 3; ++a) {
-    r[a] = a < d.dim ? index_range(l, a, box.lo[a], box.hi[a]) : std::pair<long long, long long>{0, 0};
+    r[a] =
+        a < d.dim ? index_range(l, a, box.lo[a], box.hi[a]) : std::pair<long long, long long>{0, 0};
     if (r[a].first > r[a].second) {
       return;
     }
@@ -95,7 +96,8 @@ std::size_t count_lattice_points(const ModelDimension& d, const LatticeSpec& lat
   }
   std::unordered_set<std::array<long long, 3>, IndexHash> seen;
   for (const Box& b : region.boxes) {
-    for_each_lattice_point(d, lattice, b, [&](const std::array<long long, 3>& idx) { seen.insert(idx); });
+    for_each_lattice_point(d, lattice, b,
+                           [&](const std::array<long long, 3>& idx) { seen.insert(idx); });
   }
   return seen.size();
 }
@@ -122,7 +124,8 @@ ParticleSet generate_lattice(const ModelDimension& d, const LatticeSpec& lattice
   }
   // x fastest, then y, then z: neighbours along a beam's span sit next to each other in memory.
   std::sort(entries.begin(), entries.end(), [](const Entry& a, const Entry& b) {
-    return std::tie(a.index[2], a.index[1], a.index[0]) < std::tie(b.index[2], b.index[1], b.index[0]);
+    return std::tie(a.index[2], a.index[1], a.index[0]) <
+           std::tie(b.index[2], b.index[1], b.index[0]);
   });
 
   ParticleSet ps;

@@ -10,7 +10,9 @@ namespace pd {
 namespace {
 
 /// Tolerance for "a particle lies in a region": far below λ, far above round-off.
-double region_tolerance(const ModelSpec& spec) { return 1e-6 * spec.lattice.spacing; }
+double region_tolerance(const ModelSpec& spec) {
+  return 1e-6 * spec.lattice.spacing;
+}
 
 /// Partial-volume factor of a bond of length r (δ the horizon, λ the spacing).
 /// `linear`: the fraction of the neighbour's cell inside the horizon when the cell is treated as a
@@ -98,7 +100,8 @@ std::size_t Model::memory_bytes() const {
   bytes += (field.bond_stiffness.size() + field.bond_critical_stretch.size() +
             field.bond_yield_stretch.size()) *
            sizeof(double);
-  bytes += state.broken.size() + (state.plastic_stretch.size() + state.damage.size()) * sizeof(double);
+  bytes +=
+      state.broken.size() + (state.plastic_stretch.size() + state.damage.size()) * sizeof(double);
   bytes += density.size() * sizeof(double) + external_force_density.size() * sizeof(double);
   bytes += constraints.size() * sizeof(Constraint);
   bytes += 9 * n * sizeof(double); // run state: positions, velocities, forces
@@ -153,9 +156,9 @@ Model build_model(const ModelSpec& spec) {
   // Effects that follow from the model rather than being declared.
   m.effects = spec.effects;
   const std::set<std::uint16_t> used(m.particles.material.begin(), m.particles.material.end());
-  m.effects.per_bond_field = used.size() > 1 || spec.surface_correction != SurfaceCorrection::none ||
-                             spec.volume_correction != VolumeCorrection::none ||
-                             spec.lattice.volume_variation > 0;
+  m.effects.per_bond_field =
+      used.size() > 1 || spec.surface_correction != SurfaceCorrection::none ||
+      spec.volume_correction != VolumeCorrection::none || spec.lattice.volume_variation > 0;
   m.effects.body_force = std::any_of(spec.loads.begin(), spec.loads.end(), [](const LoadSpec& l) {
     return l.load.kind == BoxRegionLoad::Kind::body;
   });
@@ -242,9 +245,10 @@ Model build_model(const ModelSpec& spec) {
       }
     }
   }
-  std::stable_sort(constraints.begin(), constraints.end(), [](const Constraint& a, const Constraint& b) {
-    return a.particle != b.particle ? a.particle < b.particle : a.component < b.component;
-  });
+  std::stable_sort(
+      constraints.begin(), constraints.end(), [](const Constraint& a, const Constraint& b) {
+        return a.particle != b.particle ? a.particle < b.particle : a.component < b.component;
+      });
   for (const Constraint& c : constraints) {
     if (!m.constraints.empty() && m.constraints.back().particle == c.particle &&
         m.constraints.back().component == c.component) {

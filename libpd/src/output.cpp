@@ -1,8 +1,7 @@
 #include "libpd/output.hpp"
 
-#include <fmt/format.h>
-
 #include <cmath>
+#include <fmt/format.h>
 #include <fstream>
 #include <stdexcept>
 #include <unistd.h>
@@ -170,7 +169,8 @@ void write_vtu(const std::filesystem::path& path, const Simulation& sim) {
   const std::size_t n = m.size();
   auto check = [&](double v, const char* what) {
     if (!std::isfinite(v)) {
-      throw std::runtime_error(fmt::format("refusing to write {}: non-finite {}", path.string(), what));
+      throw std::runtime_error(
+          fmt::format("refusing to write {}: non-finite {}", path.string(), what));
     }
   };
   std::string s;
@@ -197,9 +197,11 @@ void write_vtu(const std::filesystem::path& path, const Simulation& sim) {
     s += "1\n"; // VTK_VERTEX
   }
   s += "</DataArray>\n</Cells>\n<PointData Vectors=\"displacement\">\n";
-  s += "<DataArray type=\"Float64\" Name=\"displacement\" NumberOfComponents=\"3\" format=\"ascii\">\n";
+  s += "<DataArray type=\"Float64\" Name=\"displacement\" NumberOfComponents=\"3\" "
+       "format=\"ascii\">\n";
   for (std::size_t i = 0; i < n; ++i) {
-    const double u0 = sim.displacement(i, 0), u1 = sim.displacement(i, 1), u2 = sim.displacement(i, 2);
+    const double u0 = sim.displacement(i, 0), u1 = sim.displacement(i, 1),
+                 u2 = sim.displacement(i, 2);
     check(u0 + u1 + u2, "displacement");
     s += fmt::format("{} {} {}\n", u0, u1, u2);
   }

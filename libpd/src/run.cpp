@@ -2,11 +2,10 @@
 
 #include "libpd/stable_time_step.hpp"
 
-#include <fmt/format.h>
-
 #include <atomic>
 #include <chrono>
 #include <csignal>
+#include <fmt/format.h>
 #include <limits>
 
 namespace pd {
@@ -15,7 +14,9 @@ namespace {
 
 std::atomic<bool> interrupt_requested{false};
 
-extern "C" void on_interrupt(int) { interrupt_requested.store(true); }
+extern "C" void on_interrupt(int) {
+  interrupt_requested.store(true);
+}
 
 std::string history_csv(const std::vector<ResolvedProbe>& probes, const ProbeHistory& h) {
   std::string s = "time";
@@ -35,7 +36,8 @@ std::string history_csv(const std::vector<ResolvedProbe>& probes, const ProbeHis
 
 } // namespace
 
-std::vector<ResolvedProbe> resolve_probes(const std::vector<ProbeSpec>& probes, const Model& model) {
+std::vector<ResolvedProbe> resolve_probes(const std::vector<ProbeSpec>& probes,
+                                          const Model& model) {
   std::vector<ResolvedProbe> out;
   const int dim = model.spec.dimension.dim;
   const double tol = 1e-6 * model.spec.lattice.spacing;
@@ -99,7 +101,8 @@ RunOutcome run_scene(const Scene& scene, const RunOptions& options) {
     const std::string name = fmt::format("particles-{:08d}.vtu", s.state().step);
     write_vtu(dir / name, s);
     vtu_files.emplace_back(s.state().time, name);
-    std::string pvd = "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n";
+    std::string pvd =
+        "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n";
     for (const auto& [t, f] : vtu_files) {
       pvd += fmt::format("<DataSet timestep=\"{}\" file=\"{}\"/>\n", t, f);
     }
@@ -180,7 +183,8 @@ RunOutcome run_scene(const Scene& scene, const RunOptions& options) {
   j["dimension"] = scene.model.dimension.dim;
   j["particles"] = out.particles;
   j["bonds"] = out.bonds;
-  j["bonds_per_particle"] = 2.0 * static_cast<double>(out.bonds) / static_cast<double>(out.particles);
+  j["bonds_per_particle"] =
+      2.0 * static_cast<double>(out.bonds) / static_cast<double>(out.particles);
   j["horizon"] = model.horizon();
   j["spacing"] = scene.model.lattice.spacing;
   j["integrator"] = to_string(scene.solver.integrator);
@@ -193,7 +197,8 @@ RunOutcome run_scene(const Scene& scene, const RunOptions& options) {
   j["force_evaluations"] = out.result.force_evaluations;
   j["setup_seconds"] = out.setup_seconds;
   j["wall_seconds"] = out.result.wall_seconds;
-  j["bond_updates"] = static_cast<double>(out.bonds) * static_cast<double>(out.result.force_evaluations);
+  j["bond_updates"] =
+      static_cast<double>(out.bonds) * static_cast<double>(out.result.force_evaluations);
   j["bond_updates_per_second"] =
       bond_updates_per_second(out.bonds, out.result.force_evaluations, out.result.wall_seconds);
   j["kinetic_energy"] = out.result.kinetic_energy;

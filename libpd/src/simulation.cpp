@@ -2,10 +2,9 @@
 
 #include "libpd/stable_time_step.hpp"
 
-#include <fmt/format.h>
-
 #include <chrono>
 #include <cmath>
+#include <fmt/format.h>
 #include <limits>
 
 namespace pd {
@@ -53,15 +52,16 @@ Simulation::Simulation(Model& model, const SolverSpec& solver, const InitialSpec
   dt_stable_ = stable_time_step(model);
   dt_ = solver.dt ? *solver.dt : solver.safety * dt_stable_;
   if (!(dt_ > 0) || !std::isfinite(dt_)) {
-    throw std::runtime_error(fmt::format(
-        "no usable time step: dt = {} (eq. 31 limit {}); does the model have bonds?", dt_, dt_stable_));
+    throw std::runtime_error(
+        fmt::format("no usable time step: dt = {} (eq. 31 limit {}); does the model have bonds?",
+                    dt_, dt_stable_));
   }
   const double diagonal =
       std::sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
                 (hi[2] - lo[2]) * (hi[2] - lo[2]));
-  const double blowup =
-      solver.blowup_displacement > 0 ? solver.blowup_displacement
-                                     : std::max(diagonal, model.spec.lattice.spacing);
+  const double blowup = solver.blowup_displacement > 0
+                            ? solver.blowup_displacement
+                            : std::max(diagonal, model.spec.lattice.spacing);
   blowup_squared_ = blowup * blowup;
 
   forces_ = make_force_evaluator(model);
@@ -76,12 +76,15 @@ double Simulation::kinetic_energy() const {
   double ke = 0;
   for (std::size_t i = 0; i < model_.size(); ++i) {
     const double* v = &state_.velocity[3 * i];
-    ke += 0.5 * model_.density[i] * model_.particles.volume[i] * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+    ke += 0.5 * model_.density[i] * model_.particles.volume[i] *
+          (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
   }
   return ke;
 }
 
-double Simulation::strain_energy() const { return forces_->strain_energy(state_.position.data()); }
+double Simulation::strain_energy() const {
+  return forces_->strain_energy(state_.position.data());
+}
 
 double Simulation::relative_residual() const {
   // Free degrees of freedom carry the out-of-balance force (b + F b_ext)·V; constrained ones carry
@@ -149,7 +152,8 @@ RunResult Simulation::run(const Observer& observer) {
       const double ke = kinetic_energy();
       const double u = strain_energy();
       r.residual = relative_residual();
-      if (ke <= solver_.steady.kinetic_tolerance * u && r.residual <= solver_.steady.force_tolerance) {
+      if (ke <= solver_.steady.kinetic_tolerance * u &&
+          r.residual <= solver_.steady.force_tolerance) {
         r.status = RunStatus::converged;
         break;
       }

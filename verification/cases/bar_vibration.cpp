@@ -11,10 +11,9 @@
 #include "libpd/run.hpp"
 #include "libpd/scene.hpp"
 
-#include <fmt/format.h>
-
 #include <algorithm>
 #include <cmath>
+#include <fmt/format.h>
 #include <numbers>
 
 namespace pd::verification {
@@ -100,12 +99,14 @@ Json run_bar_vibration(const Context& ctx) {
   for (std::size_t r = 0; r < pd_u.size(); ++r) {
     rms += (pd_u[r] - exact_u[r]) * (pd_u[r] - exact_u[r]);
   }
-  rms = std::sqrt(rms / static_cast<double>(std::max<std::size_t>(pd_u.size(), 1))) / (strain * length);
+  rms = std::sqrt(rms / static_cast<double>(std::max<std::size_t>(pd_u.size(), 1))) /
+        (strain * length);
 
   const double period_error = relative_error(pd_osc.period, exact.period);
   const double amplitude_error = relative_error(pd_osc.amplitude, exact.amplitude);
   const bool stable = run.result.status == RunStatus::end_time;
-  const bool passed = stable && pd_osc.cycles >= 5 && period_error <= 0.01 && amplitude_error <= 0.02;
+  const bool passed =
+      stable && pd_osc.cycles >= 5 && period_error <= 0.01 && amplitude_error <= 0.02;
 
   Json out;
   out["case"] = "bar-vibration";

@@ -45,11 +45,12 @@ Json run_block_tension(const Context& ctx) {
   out["steady_state"]["residual"] = run.result.residual;
   out["run"] = run.summary;
   out["passed"] = run.result.status == RunStatus::converged;
-  fmt::print("   u_x(0.995) = {:.6e} m vs sigma x/E = {:.6e} m (error {:.2f} %); lateral strain {:.4e} "
-             "vs {:.4e} (error {:.2f} %); {} after {} steps\n",
-             elongation, elongation_ref, 100 * relative_error(elongation, elongation_ref), lateral,
-             lateral_ref, 100 * relative_error(lateral, lateral_ref), to_string(run.result.status),
-             run.result.steps);
+  fmt::print(
+      "   u_x(0.995) = {:.6e} m vs sigma x/E = {:.6e} m (error {:.2f} %); lateral strain {:.4e} "
+      "vs {:.4e} (error {:.2f} %); {} after {} steps\n",
+      elongation, elongation_ref, 100 * relative_error(elongation, elongation_ref), lateral,
+      lateral_ref, 100 * relative_error(lateral, lateral_ref), to_string(run.result.status),
+      run.result.steps);
   return out;
 }
 

@@ -10,9 +10,8 @@
 #include "libpd/bond_family.hpp"
 #include "libpd/scene.hpp"
 
-#include <fmt/format.h>
-
 #include <cmath>
+#include <fmt/format.h>
 #include <numbers>
 
 namespace pd::verification {
@@ -32,9 +31,10 @@ Counts count(const std::filesystem::path& scene_path) {
   const double delta = spec.lattice.horizon();
   Counts c;
   c.particles = ps.size();
-  c.strict = build_bond_family(ps.position, spec.dimension.dim, delta, HorizonRule::strict).bond_count();
-  c.inclusive =
-      build_bond_family(ps.position, spec.dimension.dim, delta, HorizonRule::inclusive).bond_count();
+  c.strict =
+      build_bond_family(ps.position, spec.dimension.dim, delta, HorizonRule::strict).bond_count();
+  c.inclusive = build_bond_family(ps.position, spec.dimension.dim, delta, HorizonRule::inclusive)
+                    .bond_count();
   return c;
 }
 
@@ -87,8 +87,8 @@ Json run_bond_count(const Context& ctx) {
         static_cast<double>(p.bonds - c.strict) / static_cast<double>(c.inclusive - c.strict);
     reference[p.name]["particles"] = p.particles;
     reference[p.name]["bonds"] = p.bonds;
-    error[std::string(p.name) + "_bonds_vs_inclusive"] = relative_error(
-        static_cast<double>(c.inclusive), static_cast<double>(p.bonds));
+    error[std::string(p.name) + "_bonds_vs_inclusive"] =
+        relative_error(static_cast<double>(c.inclusive), static_cast<double>(p.bonds));
     fmt::print("   {}: {} particles (paper {}), bonds strict {} <= paper {} <= inclusive {}: {}\n",
                p.name, c.particles, p.particles, c.strict, p.bonds, c.inclusive,
                ok ? "bracketed" : "NOT bracketed");
@@ -107,7 +107,8 @@ Json run_bond_count(const Context& ctx) {
     row["miranda_table1"] = table1[m - 1];
     row["eq37"] = eq37;
     table.push_back(row);
-    fmt::print("   {:>12} {:>7} {:>10} {:>16} {:>7.1f}\n", m, strict, inclusive, table1[m - 1], eq37);
+    fmt::print("   {:>12} {:>7} {:>10} {:>16} {:>7.1f}\n", m, strict, inclusive, table1[m - 1],
+               eq37);
   }
   out["bonds_per_particle_infinite_lattice"] = table;
   out["note"] =

@@ -15,7 +15,8 @@ const std::vector<Case>& all_cases() {
   static const std::vector<Case> cases = {
       {"bond-count", "particle and bond counts of Miranda's Models A and B; bonds per particle",
        run_bond_count},
-      {"bar-vibration", "1D bar released from a uniform strain vs the modal series (period, amplitude)",
+      {"bar-vibration",
+       "1D bar released from a uniform strain vs the modal series (period, amplitude)",
        run_bar_vibration},
       {"bar-energy", "undamped Verlet bar: energy drift over 10^4 steps at 0.9 x the eq. 31 step",
        run_bar_energy},

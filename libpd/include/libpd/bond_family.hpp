@@ -27,9 +27,9 @@ enum class HorizonRule { inclusive, strict };
 inline constexpr double horizon_guard_band = 1e-9;
 
 struct BondFamily {
-  std::vector<std::size_t> offsets;      ///< size N+1; row i is [offsets[i], offsets[i+1])
-  std::vector<std::uint32_t> neighbour;  ///< j of each directed bond
-  std::vector<double> inverse_length;    ///< 1/|ξ| of each directed bond
+  std::vector<std::size_t> offsets;     ///< size N+1; row i is [offsets[i], offsets[i+1])
+  std::vector<std::uint32_t> neighbour; ///< j of each directed bond
+  std::vector<double> inverse_length;   ///< 1/|ξ| of each directed bond
 
   std::size_t particle_count() const { return offsets.empty() ? 0 : offsets.size() - 1; }
   std::size_t directed_bond_count() const { return neighbour.size(); }

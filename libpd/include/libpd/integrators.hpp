@@ -36,7 +36,9 @@ struct State {
 /// Load factor F(t) = min(t/t_ramp, 1) (eq. 33); F = 1 without a ramp.
 struct LoadRamp {
   double ramp_time = 0;
-  double factor(double t) const { return ramp_time > 0 ? (t < ramp_time ? t / ramp_time : 1.0) : 1.0; }
+  double factor(double t) const {
+    return ramp_time > 0 ? (t < ramp_time ? t / ramp_time : 1.0) : 1.0;
+  }
   double rate(double t) const { return ramp_time > 0 && t < ramp_time ? 1.0 / ramp_time : 0.0; }
 };
 

@@ -23,7 +23,7 @@ namespace pd {
 enum class LatticeConvention { cell_centered, node_based };
 
 struct LatticeSpec {
-  double spacing = 0;                              ///< λ [m]
+  double spacing = 0;                               ///< λ [m]
   double horizon_factor = 2.0 * 1.7320508075688772; ///< m = δ/λ; default 2√3 (Miranda §4)
   LatticeConvention convention = LatticeConvention::cell_centered;
   Vec3 origin{0, 0, 0};

@@ -20,15 +20,15 @@ enum class PlaneMode { plane_stress, plane_strain };
 struct ModelDimension {
   int dim = 3;
   PlaneMode plane = PlaneMode::plane_stress;
-  double thickness = 1.0;    ///< 2D only [m]
+  double thickness = 1.0;     ///< 2D only [m]
   double cross_section = 1.0; ///< 1D only [m²]
 };
 
 struct Material {
   std::string name;
-  double youngs_modulus = 0;    ///< E [Pa]
-  double poisson_ratio = 0.25;  ///< ν as given by the user (bond-based PD cannot honour all values)
-  double density = 0;           ///< ρ [kg/m³]
+  double youngs_modulus = 0;   ///< E [Pa]
+  double poisson_ratio = 0.25; ///< ν as given by the user (bond-based PD cannot honour all values)
+  double density = 0;          ///< ρ [kg/m³]
   std::optional<double> fracture_energy;  ///< G0 [J/m²]; with it s0 is derived (eq. 11)
   std::optional<double> critical_stretch; ///< s0, given directly
   std::optional<double> yield_stretch;    ///< s_Y (eq. 15)

@@ -24,9 +24,9 @@ enum class VolumeCorrection { none, linear, exact };
 /// Bond stiffness and strengths. Either one value for the whole body (uniform) or one value per
 /// directed bond (per-bond field): the kernel is compiled for one of the two.
 struct BondField {
-  double stiffness = 0;               ///< c·V_j [N/m³ per unit stretch], uniform case
-  double critical_stretch = no_limit; ///< s0, uniform case
-  double yield_stretch = no_limit;    ///< s_Y, uniform case
+  double stiffness = 0;                      ///< c·V_j [N/m³ per unit stretch], uniform case
+  double critical_stretch = no_limit;        ///< s0, uniform case
+  double yield_stretch = no_limit;           ///< s_Y, uniform case
   std::vector<double> bond_stiffness;        ///< c_ij·V_j·(correction factors), per bond
   std::vector<double> bond_critical_stretch; ///< allocated only with damage
   std::vector<double> bond_yield_stretch;    ///< allocated only with plasticity
@@ -90,9 +90,9 @@ struct Model {
   BondField field;
   BondState state;
   EffectSet effects;
-  std::vector<double> density;                 ///< per particle [kg/m³]
-  std::vector<Constraint> constraints;         ///< sorted by particle, then component
-  std::vector<double> external_force_density;  ///< 3N, full (unramped) load [N/m³]
+  std::vector<double> density;                ///< per particle [kg/m³]
+  std::vector<Constraint> constraints;        ///< sorted by particle, then component
+  std::vector<double> external_force_density; ///< 3N, full (unramped) load [N/m³]
 
   std::size_t size() const { return particles.size(); }
   double horizon() const { return spec.lattice.horizon(); }

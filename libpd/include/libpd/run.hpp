@@ -27,7 +27,7 @@ struct RunOptions {
   std::filesystem::path output_dir; ///< empty: write nothing
   bool progress = false;            ///< progress line on stderr
   bool write_vtu = true;
-  bool stop_on_interrupt = true;    ///< SIGINT ends the run cleanly with status `interrupted`
+  bool stop_on_interrupt = true; ///< SIGINT ends the run cleanly with status `interrupted`
 };
 
 struct ProbeHistory {
@@ -52,7 +52,8 @@ RunOutcome run_scene(const Scene& scene, const RunOptions& options);
 /// bond updates per second: one update = one bond's force computed once per evaluation,
 /// whatever the storage (the CSR gather computes each bond from both ends but counts it once).
 inline double bond_updates_per_second(std::size_t bonds, std::size_t evaluations, double seconds) {
-  return seconds > 0 ? static_cast<double>(bonds) * static_cast<double>(evaluations) / seconds : 0.0;
+  return seconds > 0 ? static_cast<double>(bonds) * static_cast<double>(evaluations) / seconds
+                     : 0.0;
 }
 
 } // namespace pd

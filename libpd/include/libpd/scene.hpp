@@ -47,7 +47,7 @@ struct OutputSpec {
 };
 
 struct Scene {
-  std::string path;  ///< file it was read from
+  std::string path; ///< file it was read from
   std::string title;
   ModelSpec model;
   SolverSpec solver;

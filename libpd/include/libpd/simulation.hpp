@@ -24,12 +24,12 @@ struct SteadyStateCriterion {
 
 struct SolverSpec {
   IntegratorKind integrator = IntegratorKind::damped_euler;
-  std::optional<double> dt;    ///< nullopt: auto = safety × eq. 31
+  std::optional<double> dt; ///< nullopt: auto = safety × eq. 31
   double safety = 0.8;
   std::optional<double> end_time;
   SteadyStateCriterion steady;
   double ramp_time = 0;
-  double damping = 0;          ///< c_v
+  double damping = 0; ///< c_v
   std::size_t max_steps = 100'000'000;
   /// A displacement larger than this means the run has blown up. 0: the bounding-box diagonal.
   double blowup_displacement = 0;
