@@ -1,5 +1,7 @@
 #include "libpd/model.hpp"
 
+#include "libpd/corrections.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <set>
@@ -12,17 +14,6 @@ namespace {
 /// Tolerance for "a particle lies in a region": far below λ, far above round-off.
 double region_tolerance(const ModelSpec& spec) {
   return 1e-6 * spec.lattice.spacing;
-}
-
-/// Partial-volume factor of a bond of length r (δ the horizon, λ the spacing).
-/// `linear`: the fraction of the neighbour's cell inside the horizon when the cell is treated as a
-/// slab of thickness λ centred on the neighbour: f = (δ + λ/2 − r)/λ on δ − λ/2 < r ≤ δ + λ/2
-/// (common since Parks et al. 2008, e.g. Madenci & Oterkus 2014 §7).
-double volume_fraction(VolumeCorrection vc, double r, double horizon, double spacing) {
-  if (vc == VolumeCorrection::linear && r > horizon - 0.5 * spacing) {
-    return std::clamp((horizon + 0.5 * spacing - r) / spacing, 0.0, 1.0);
-  }
-  return 1.0;
 }
 
 struct MaterialConstants {
@@ -49,35 +40,6 @@ std::vector<MaterialConstants> material_constants(const ModelSpec& spec) {
     out.push_back(k);
   }
   return out;
-}
-
-/// Family volume of a particle in the bulk of the same lattice: Σ over lattice offsets within the
-/// horizon of V·(volume fraction). Used as V0 by the `volume` surface correction.
-double bulk_family_volume(const ModelSpec& spec) {
-  const double lambda = spec.lattice.spacing;
-  const double delta = spec.lattice.horizon();
-  const double reach = delta * (1.0 + horizon_guard_band);
-  const auto m = static_cast<long long>(std::ceil(spec.lattice.horizon_factor)) + 1;
-  const int dim = spec.dimension.dim;
-  const double v = cell_volume(spec.dimension, lambda);
-  double sum = 0;
-  for (long long k = (dim > 2 ? -m : 0); k <= (dim > 2 ? m : 0); ++k) {
-    for (long long j = (dim > 1 ? -m : 0); j <= (dim > 1 ? m : 0); ++j) {
-      for (long long i = -m; i <= m; ++i) {
-        if (i == 0 && j == 0 && k == 0) {
-          continue;
-        }
-        const double r = lambda * std::sqrt(static_cast<double>(i * i + j * j + k * k));
-        const bool inside = spec.horizon_rule == HorizonRule::inclusive
-                                ? r <= reach
-                                : r < delta * (1.0 - horizon_guard_band);
-        if (inside) {
-          sum += v * volume_fraction(spec.volume_correction, r, delta, lambda);
-        }
-      }
-    }
-  }
-  return sum;
 }
 
 std::vector<std::uint32_t> particles_in(const ParticleSet& ps, const Region& region, int dim,
@@ -134,18 +96,10 @@ Model build_model(const ModelSpec& spec) {
   if (spec.materials.empty() || spec.bodies.empty()) {
     throw std::runtime_error("a model needs at least one material and one body");
   }
-  if (spec.surface_correction == SurfaceCorrection::energy ||
-      spec.surface_correction == SurfaceCorrection::macek_silling ||
-      spec.volume_correction == VolumeCorrection::exact) {
-    throw std::runtime_error(
-        "this correction is not available yet (surface_correction: none|volume, "
-        "volume_correction: none|linear)");
-  }
   Model m;
   m.spec = spec;
   const int dim = spec.dimension.dim;
   const double delta = spec.lattice.horizon();
-  const double lambda = spec.lattice.spacing;
   m.particles = generate_lattice(spec.dimension, spec.lattice, spec.bodies);
   const std::size_t n = m.particles.size();
   if (n == 0) {
@@ -183,21 +137,7 @@ Model build_model(const ModelSpec& spec) {
     if (m.effects.plasticity) {
       m.field.bond_yield_stretch.resize(nb);
     }
-    // Family volumes for the `volume` surface correction.
-    std::vector<double> family_volume;
-    double bulk = 1;
-    if (spec.surface_correction == SurfaceCorrection::volume) {
-      bulk = bulk_family_volume(spec);
-      family_volume.assign(n, 0.0);
-      for (std::size_t i = 0; i < n; ++i) {
-        for (std::size_t k = m.family.offsets[i]; k < m.family.offsets[i + 1]; ++k) {
-          const std::size_t j = m.family.neighbour[k];
-          family_volume[i] += m.particles.volume[j] *
-                              volume_fraction(spec.volume_correction,
-                                              1.0 / m.family.inverse_length[k], delta, lambda);
-        }
-      }
-    }
+    const std::vector<double> correction = bond_correction_factors(spec, m.particles, m.family);
     for (std::size_t i = 0; i < n; ++i) {
       for (std::size_t k = m.family.offsets[i]; k < m.family.offsets[i + 1]; ++k) {
         const std::size_t j = m.family.neighbour[k];
@@ -205,12 +145,7 @@ Model build_model(const ModelSpec& spec) {
         // bonds have the properties of concrete).
         const MaterialConstants& a = constants[m.particles.material[i]];
         const MaterialConstants& b = constants[m.particles.material[j]];
-        double factor = volume_fraction(spec.volume_correction, 1.0 / m.family.inverse_length[k],
-                                        delta, lambda);
-        if (spec.surface_correction == SurfaceCorrection::volume) {
-          factor *= 2.0 * bulk / (family_volume[i] + family_volume[j]);
-        }
-        m.field.bond_stiffness[k] = std::min(a.c, b.c) * m.particles.volume[j] * factor;
+        m.field.bond_stiffness[k] = std::min(a.c, b.c) * m.particles.volume[j] * correction[k];
         if (m.effects.damage) {
           m.field.bond_critical_stretch[k] = std::min(a.critical_stretch, b.critical_stretch);
         }
