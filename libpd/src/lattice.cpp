@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
 #include <stdexcept>
 #include <tuple>
@@ -90,6 +91,9 @@ std::size_t count_lattice_points(const ModelDimension& d, const LatticeSpec& lat
       product *= r.second >= r.first ? static_cast<double>(r.second - r.first + 1) : 0.0;
     }
     upper += product;
+  }
+  if (upper >= 1.8e19) {
+    return std::numeric_limits<std::size_t>::max(); // beyond size_t: clamp, never wrap to 0
   }
   if (region.boxes.size() <= 1 || upper > 2e7) {
     return static_cast<std::size_t>(upper); // exact for one box, an upper bound otherwise
