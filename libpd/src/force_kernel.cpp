@@ -60,13 +60,8 @@ public:
           r2 += dy * dy;
         }
         const double c = Field::per_bond ? d.bond_stiffness[k] : d.stiffness;
-        if constexpr (Law::has_history) {
-          // Elastic part only: ½ c L (s − ŝ)² with the exact stretch.
-          const double s = std::sqrt(r2) * d.inverse_length[k] - 1.0 - d.plastic_stretch[k];
-          w += c * 0.5 * s * s / d.inverse_length[k];
-        } else {
-          w += c * Stretch::bond_energy(r2, d.inverse_length[k]);
-        }
+        const double plastic = Law::has_history ? d.plastic_stretch[k] : 0.0;
+        w += c * Stretch::bond_energy(r2, d.inverse_length[k], plastic);
       }
       per_particle[i] = 0.5 * w * volume[i];
     }

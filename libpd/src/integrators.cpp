@@ -32,7 +32,7 @@ void apply_constraints(const Model& model, const LoadRamp& ramp, double t, doubl
 
 namespace {
 
-/// Largest |u|² over particles, NaN as soon as any coordinate is not finite.
+/// Largest |u|² over particles (may be +inf), NaN as soon as any coordinate is not finite.
 StepReport displacement_report(const Model& m, const double* y) {
   const auto n = static_cast<std::ptrdiff_t>(m.size());
   double worst = 0;
@@ -44,9 +44,9 @@ StepReport displacement_report(const Model& m, const double* y) {
     double u2 = 0;
     for (int c = 0; c < 3; ++c) {
       const double u = y[3 * i + c] - m.particles.position[i][c];
+      finite = finite && std::isfinite(u); // u² may overflow while u is still finite
       u2 += u * u;
     }
-    finite = finite && std::isfinite(u2);
     worst = std::max(worst, u2);
   }
   StepReport r;

@@ -30,8 +30,9 @@ double lattice_coordinate(const LatticeSpec& l, int axis, long long n) {
 }
 
 /// Index range [first, last] of lattice points inside [lo, hi] along one axis.
-/// Cell-centred points must lie strictly inside (the box's faces are cell faces); node-based
-/// points may lie on the faces. Both use a tolerance of 1e-6 λ against round-off in box corners.
+/// A point on a face counts as inside (within 1e-6 λ, against round-off in box corners). For boxes
+/// aligned with the lattice this never matters for cell-centred lattices (their points sit half a
+/// spacing from the faces); for node-based lattices it puts the nodes on the faces in the box.
 std::pair<long long, long long> index_range(const LatticeSpec& l, int axis, double lo, double hi) {
   const double shift = l.convention == LatticeConvention::cell_centered ? 0.5 : 0.0;
   const double tol = 1e-6;

@@ -14,18 +14,24 @@ void write_file_atomically(const std::filesystem::path& path, const std::string&
   }
   const std::filesystem::path tmp =
       path.string() + fmt::format(".tmp-{}", static_cast<long>(::getpid()));
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) {
-      throw std::runtime_error("cannot write " + tmp.string());
+  try {
+    {
+      std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+      if (!out) {
+        throw std::runtime_error("cannot write " + tmp.string());
+      }
+      out << content;
+      out.flush();
+      if (!out) {
+        throw std::runtime_error("error while writing " + tmp.string());
+      }
     }
-    out << content;
-    out.flush();
-    if (!out) {
-      throw std::runtime_error("error while writing " + tmp.string());
-    }
+    std::filesystem::rename(tmp, path);
+  } catch (...) {
+    std::error_code ignored;
+    std::filesystem::remove(tmp, ignored); // never leave a stray temporary behind
+    throw;
   }
-  std::filesystem::rename(tmp, path);
 }
 
 Json& Json::operator[](const std::string& key) {

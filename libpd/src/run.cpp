@@ -171,6 +171,15 @@ RunOutcome run_scene(const Scene& scene, const RunOptions& options) {
     for (const auto& p : probes) {
       out.probes[p.name] = probe_value(p, sim);
     }
+    if (options.keep_final_field) {
+      out.positions = model.particles.position;
+      out.displacement.resize(3 * model.size());
+      for (std::size_t i = 0; i < model.size(); ++i) {
+        for (int c = 0; c < 3; ++c) {
+          out.displacement[3 * i + c] = sim.displacement(i, c);
+        }
+      }
+    }
   }
 
   Json& j = out.summary;

@@ -116,7 +116,7 @@ public:
   /// Internal force density b (3N) at positions y (3N); updates bond history.
   virtual void compute(const double* y, double* b) = 0;
   /// Stored elastic energy Σ_i V_i · ½ Σ_j w_ij V_j [J] at positions y; history is not changed.
-  /// (For plastic bonds only the elastic part s − ŝ is counted.)
+  /// (For plastic bonds: the energy of the elastic part, measured from the plastic length.)
   virtual double strain_energy(const double* y) const = 0;
   /// The instantiation in use, e.g. "stretch=fast law=elastic damage=off field=uniform".
   virtual std::string description() const = 0;

@@ -6,6 +6,7 @@
 #include "libpd/simulation.hpp"
 
 #include <filesystem>
+#include <limits>
 #include <list>
 #include <map>
 #include <optional>
@@ -34,8 +35,15 @@ public:
   Json(long i) : value_(static_cast<long long>(i)) {}
   Json(long long i) : value_(i) {}
   Json(unsigned i) : value_(static_cast<long long>(i)) {}
-  Json(unsigned long i) : value_(static_cast<long long>(i)) {}
-  Json(unsigned long long i) : value_(static_cast<long long>(i)) {}
+  Json(unsigned long i) : Json(static_cast<unsigned long long>(i)) {}
+  /// Values beyond the signed range are kept as (rounded) doubles rather than wrapping.
+  Json(unsigned long long i) {
+    if (i <= static_cast<unsigned long long>(std::numeric_limits<long long>::max())) {
+      value_ = static_cast<long long>(i);
+    } else {
+      value_ = static_cast<double>(i);
+    }
+  }
   Json(std::string s) : value_(std::move(s)) {}
   Json(const char* s) : value_(std::string(s)) {}
   Json(Array a) : value_(std::move(a)) {}

@@ -28,6 +28,7 @@ struct RunOptions {
   bool progress = false;            ///< progress line on stderr
   bool write_vtu = true;
   bool stop_on_interrupt = true; ///< SIGINT ends the run cleanly with status `interrupted`
+  bool keep_final_field = false; ///< return reference positions and final displacements
 };
 
 struct ProbeHistory {
@@ -43,6 +44,10 @@ struct RunOutcome {
   std::map<std::string, double> probes;
   ProbeHistory history;
   Json summary;
+  /// With RunOptions::keep_final_field: reference positions and final displacements (3 per
+  /// particle), e.g. to extract deflection lines.
+  std::vector<Vec3> positions;
+  std::vector<double> displacement;
 };
 
 /// Run a scene and (if output_dir is set) write summary.json, probes.csv and VTU files there.

@@ -30,6 +30,7 @@ template <class S>
 concept StretchMeasure = requires(double r2, double inv_len) {
   { S::evaluate(r2, inv_len) } -> std::same_as<StretchResult>;
   { S::bond_energy(r2, inv_len) } -> std::same_as<double>;
+  { S::bond_energy(r2, inv_len, r2) } -> std::same_as<double>;
   { S::name } -> std::convertible_to<std::string_view>;
 };
 
@@ -39,10 +40,11 @@ struct ExactStretch {
     const double r = std::sqrt(r2);
     return {r * inv_len - 1.0, 1.0 / r};
   }
-  /// Energy per unit c of a linear bond, w/c = L s²/2; its derivative in r is s (force c·s).
-  static double bond_energy(double r2, double inv_len) {
-    const double s = std::sqrt(r2) * inv_len - 1.0;
-    return 0.5 * s * s / inv_len;
+  /// Energy per unit c of a linear bond with plastic stretch ŝ: w/c = L (s − ŝ)²/2; its derivative
+  /// in r is s − ŝ (force c(s − ŝ), eq. 14).
+  static double bond_energy(double r2, double inv_len, double plastic = 0.0) {
+    const double e = std::sqrt(r2) * inv_len - 1.0 - plastic;
+    return 0.5 * e * e / inv_len;
   }
 };
 
@@ -51,13 +53,13 @@ struct ModifiedStretch {
   static StretchResult evaluate(double r2, double inv_len) {
     return {0.5 * (r2 * inv_len * inv_len - 1.0), 1.0 / std::sqrt(r2)};
   }
-  /// The force c·s̄(r) is central, so the potential is ∫_L^r c s̄ dr' =
-  /// c (r³/3 − L² r + 2L³/3)/(2L²).
-  static double bond_energy(double r2, double inv_len) {
+  /// The force c(s̄(r) − ŝ) is central, so its potential is ∫_{r_p}^{r} c(s̄ − ŝ) dr' with s̄(r_p) =
+  /// ŝ, r_p = L√(1 + 2ŝ): w/c = (r − r_p)²(r + 2r_p)/(6L²). Written in this factored form, not as
+  /// r³/3 − L²r + 2L³/3, because the expanded form cancels catastrophically at small stretch.
+  static double bond_energy(double r2, double inv_len, double plastic = 0.0) {
     const double r = std::sqrt(r2);
-    const double len = 1.0 / inv_len;
-    return (r * r * r / 3.0 - len * len * r + 2.0 * len * len * len / 3.0) * 0.5 * inv_len *
-           inv_len;
+    const double rp = std::sqrt(1.0 + 2.0 * plastic) / inv_len;
+    return (r - rp) * (r - rp) * (r + 2.0 * rp) * inv_len * inv_len / 6.0;
   }
 };
 
@@ -66,10 +68,10 @@ struct FastStretch {
   static StretchResult evaluate(double r2, double inv_len) {
     return {0.5 * (r2 * inv_len * inv_len - 1.0), inv_len};
   }
-  /// Force c·s̄·Δy/L derives from w = c L s̄²/2 (∂s̄/∂Δy = Δy/L²).
-  static double bond_energy(double r2, double inv_len) {
-    const double s = 0.5 * (r2 * inv_len * inv_len - 1.0);
-    return 0.5 * s * s / inv_len;
+  /// Force c(s̄ − ŝ)·Δy/L derives from w = c L (s̄ − ŝ)²/2 (∂s̄/∂Δy = Δy/L²).
+  static double bond_energy(double r2, double inv_len, double plastic = 0.0) {
+    const double e = 0.5 * (r2 * inv_len * inv_len - 1.0) - plastic;
+    return 0.5 * e * e / inv_len;
   }
 };
 
