@@ -1,0 +1,266 @@
+#include "report.h"
+
+#include <cmath>
+#include <ctime>
+#include <fstream>
+#include <iomanip>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+
+namespace pdfem
+{
+  void write_atomically(const std::filesystem::path &           path,
+                        const std::function<void(std::ostream &)> &writer)
+  {
+    if (path.has_parent_path())
+      std::filesystem::create_directories(path.parent_path());
+    std::filesystem::path tmp = path;
+    tmp += ".tmp";
+    {
+      std::ofstream out(tmp, std::ios::out | std::ios::trunc);
+      if (!out)
+        throw std::runtime_error("cannot open '" + tmp.string() +
+                                 "' for writing");
+      writer(out);
+      out.flush();
+      if (!out)
+        throw std::runtime_error("error while writing '" + tmp.string() + "'");
+    }
+    std::filesystem::rename(tmp, path);
+  }
+
+  JsonWriter::JsonWriter(std::ostream &o)
+    : out(o)
+  {}
+
+  std::string JsonWriter::escape(const std::string &s)
+  {
+    std::string r;
+    r.reserve(s.size() + 2);
+    for (const char c : s)
+      switch (c)
+        {
+          case '"':
+            r += "\\\"";
+            break;
+          case '\\':
+            r += "\\\\";
+            break;
+          case '\n':
+            r += "\\n";
+            break;
+          case '\t':
+            r += "\\t";
+            break;
+          case '\r':
+            r += "\\r";
+            break;
+          default:
+            if (static_cast<unsigned char>(c) < 0x20)
+              {
+                char buf[8];
+                std::snprintf(buf, sizeof buf, "\\u%04x",
+                              static_cast<unsigned int>(c));
+                r += buf;
+              }
+            else
+              r += c;
+        }
+    return r;
+  }
+
+  std::string JsonWriter::number(double v)
+  {
+    if (!std::isfinite(v))
+      return "null";
+    std::ostringstream s;
+    s << std::setprecision(std::numeric_limits<double>::max_digits10) << v;
+    return s.str();
+  }
+
+  void JsonWriter::prefix(const std::string &key)
+  {
+    if (!first_in_scope.empty())
+      {
+        if (!first_in_scope.back())
+          out << ',';
+        first_in_scope.back() = false;
+        out << '\n' << std::string(2 * first_in_scope.size(), ' ');
+        if (!scope_is_array.back())
+          out << '"' << escape(key) << "\": ";
+      }
+  }
+
+  JsonWriter &JsonWriter::begin_object(const std::string &key)
+  {
+    prefix(key);
+    out << '{';
+    first_in_scope.push_back(true);
+    scope_is_array.push_back(false);
+    return *this;
+  }
+
+  JsonWriter &JsonWriter::end_object()
+  {
+    const bool empty = first_in_scope.back();
+    first_in_scope.pop_back();
+    scope_is_array.pop_back();
+    if (!empty)
+      out << '\n' << std::string(2 * first_in_scope.size(), ' ');
+    out << '}';
+    if (first_in_scope.empty())
+      out << '\n';
+    return *this;
+  }
+
+  JsonWriter &JsonWriter::begin_array(const std::string &key)
+  {
+    prefix(key);
+    out << '[';
+    first_in_scope.push_back(true);
+    scope_is_array.push_back(true);
+    return *this;
+  }
+
+  JsonWriter &JsonWriter::end_array()
+  {
+    const bool empty = first_in_scope.back();
+    first_in_scope.pop_back();
+    scope_is_array.pop_back();
+    if (!empty)
+      out << '\n' << std::string(2 * first_in_scope.size(), ' ');
+    out << ']';
+    return *this;
+  }
+
+  JsonWriter &JsonWriter::value(const std::string &key, double v)
+  {
+    prefix(key);
+    out << number(v);
+    return *this;
+  }
+
+  JsonWriter &JsonWriter::value(const std::string &key, int v)
+  {
+    prefix(key);
+    out << v;
+    return *this;
+  }
+
+  JsonWriter &JsonWriter::value(const std::string &key, unsigned int v)
+  {
+    prefix(key);
+    out << v;
+    return *this;
+  }
+
+  JsonWriter &JsonWriter::value(const std::string &key, unsigned long v)
+  {
+    prefix(key);
+    out << v;
+    return *this;
+  }
+
+  JsonWriter &JsonWriter::value(const std::string &key, bool v)
+  {
+    prefix(key);
+    out << (v ? "true" : "false");
+    return *this;
+  }
+
+  JsonWriter &JsonWriter::value(const std::string &key, const std::string &v)
+  {
+    prefix(key);
+    out << '"' << escape(v) << '"';
+    return *this;
+  }
+
+  JsonWriter &JsonWriter::value(const std::string &key, const char *v)
+  {
+    return value(key, std::string(v));
+  }
+
+  JsonWriter &JsonWriter::value(const std::string &          key,
+                                const std::optional<double> &v)
+  {
+    if (v)
+      return value(key, *v);
+    return null(key);
+  }
+
+  JsonWriter &JsonWriter::null(const std::string &key)
+  {
+    prefix(key);
+    out << "null";
+    return *this;
+  }
+
+  JsonWriter &JsonWriter::raw(const std::string &key,
+                              const std::string &json_text)
+  {
+    prefix(key);
+    // Re-indent the foreign text so that it nests properly.
+    const std::string indent(2 * first_in_scope.size(), ' ');
+    std::string       text = json_text;
+    while (!text.empty() && (text.back() == '\n' || text.back() == ' '))
+      text.pop_back();
+    for (const char c : text)
+      {
+        out << c;
+        if (c == '\n')
+          out << indent;
+      }
+    return *this;
+  }
+
+  Richardson richardson(const std::vector<double> &q, const double ratio)
+  {
+    Richardson r;
+    if (q.empty())
+      return r;
+    r.extrapolated = q.back();
+    if (q.size() < 2)
+      {
+        r.error_estimate = std::numeric_limits<double>::quiet_NaN();
+        r.relative_error = std::numeric_limits<double>::quiet_NaN();
+        return r;
+      }
+    const double q2 = q[q.size() - 1], q1 = q[q.size() - 2];
+    r.error_estimate = std::abs(q2 - q1); // fallback: last difference
+    if (q.size() >= 3)
+      {
+        const double q0 = q[q.size() - 3];
+        const double d1 = q1 - q0, d2 = q2 - q1;
+        if (d1 != 0. && d2 != 0. && (d1 > 0.) == (d2 > 0.) &&
+            std::abs(d2) < std::abs(d1))
+          {
+            const double p = std::log(std::abs(d1) / std::abs(d2)) /
+                             std::log(ratio);
+            r.order          = p;
+            r.extrapolated   = q2 + d2 / (std::pow(ratio, p) - 1.);
+            r.error_estimate = std::abs(r.extrapolated - q2);
+            r.valid          = true;
+          }
+        else if (d2 == 0.)
+          {
+            r.error_estimate = 0.;
+            r.valid          = true;
+          }
+      }
+    r.relative_error = (r.extrapolated != 0.) ?
+                         r.error_estimate / std::abs(r.extrapolated) :
+                         r.error_estimate;
+    return r;
+  }
+
+  std::string iso_date_time()
+  {
+    const std::time_t t = std::time(nullptr);
+    std::tm           tm{};
+    localtime_r(&t, &tm);
+    char buf[64];
+    std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%S%z", &tm);
+    return buf;
+  }
+} // namespace pdfem
