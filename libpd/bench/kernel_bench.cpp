@@ -1,7 +1,7 @@
 // Cost of each effect in the bond loop, and proof that dispatch is free.
 //
 // All benchmarks use Miranda's Model A lattice (node-based 83 × 9 × 7, λ = 0.05 m, δ = 2√3 λ,
-// 5229 particles, 316,710 bonds with the inclusive horizon rule) at a small smooth deformation.
+// 5229 particles, 319,533 bonds with the inclusive horizon rule) at a small smooth deformation.
 //  * HandWrittenElastic: a plain CSR gather loop written out by hand (exact stretch, uniform c).
 //  * Dispatched/<effects>: the kernel picked by make_force_evaluator for that effect set.
 // Elastic-exact through the dispatcher should match the hand-written loop within noise; the

@@ -9,5 +9,14 @@ Json run_bond_count(const Context& ctx);
 Json run_bar_vibration(const Context& ctx);
 Json run_bar_energy(const Context& ctx);
 Json run_block_tension(const Context& ctx);
+Json run_clamped_beam(const Context& ctx);
+Json run_cantilever(const Context& ctx);
+Json run_plate(const Context& ctx);
+Json run_clamped_beam_fast(const Context& ctx);
+Json run_cantilever_fast(const Context& ctx);
+Json run_plate_fast(const Context& ctx);
+Json run_clamped_beam_sweep(const Context& ctx);
+Json run_cantilever_sweep(const Context& ctx);
+Json run_plate_sweep(const Context& ctx);
 
 } // namespace pd::verification

@@ -22,6 +22,25 @@ const std::vector<Case>& all_cases() {
        run_bar_energy},
       {"block-tension", "3D block under 200 MPa: elongation and lateral contraction vs sigma/E",
        run_block_tension},
+      {"clamped-beam", "clamped beam at the paper's resolution vs deal.II and Timoshenko",
+       run_clamped_beam},
+      {"cantilever", "cantilever at the paper's resolution vs deal.II and Timoshenko",
+       run_cantilever},
+      {"plate-3clamped", "plate with three clamped edges at the paper's resolution vs deal.II",
+       run_plate},
+      {"clamped-beam-fast", "clamped beam on a coarse lattice (CI regression and accuracy gates)",
+       run_clamped_beam_fast},
+      {"cantilever-fast", "cantilever on a coarse lattice (CI regression and accuracy gates)",
+       run_cantilever_fast},
+      {"plate-3clamped-fast", "plate on a coarse lattice (CI regression and accuracy gates)",
+       run_plate_fast},
+      {"clamped-beam-sweep",
+       "accuracy vs time: clamped beam over spacing, horizon, stretch, "
+       "corrections and tolerance",
+       run_clamped_beam_sweep},
+      {"cantilever-sweep", "accuracy vs time: cantilever over the same knobs",
+       run_cantilever_sweep},
+      {"plate-3clamped-sweep", "accuracy vs time: plate over the same knobs", run_plate_sweep},
   };
   return cases;
 }

@@ -1,0 +1,660 @@
+// Linear-elastic structures of Miranda et al. 2019 §5.1 (clamped beam, cantilever, plate with three
+// edges clamped) against the deal.II reference of the same continuum and against beam/plate theory.
+//
+// Each case is data: verification/cases/NAME.case.yaml names the scene, the FE reference, the
+// quantities (points) and deflection lines, the gates and a coarse CI variant. This file turns such
+// a description into runs and a case JSON.
+//
+// Where PD is evaluated: particles sit at cell centres, so a point such as the beam's centre line
+// (y = b/2, z = h/2) or the plate's free edge (y = 3 m) generally lies between particle layers or
+// half a spacing outside the outer layer. The PD value there is the trilinear interpolation between
+// the two nearest layers in each direction (linear extrapolation for points on the surface), so PD
+// and FE are compared at the same physical point.
+//
+// Steady state, not step counts: the run stops at the scene's steady-state tolerance. The
+// paper-resolution case also reruns with a 100× tighter tolerance and reports the difference as
+// the relaxation error, separately from the discretisation error (PD at the tight tolerance vs FE).
+#include "cases.hpp"
+#include "libpd/run.hpp"
+#include "libpd/scene.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <fmt/format.h>
+#include <fstream>
+#include <map>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+#include <yaml-cpp/yaml.h>
+
+#ifndef PD_FEM_REFERENCE_DIR
+#define PD_FEM_REFERENCE_DIR "fem_reference/reference"
+#endif
+
+namespace pd::verification {
+
+namespace {
+
+struct PointQuantity {
+  std::string name;
+  std::string fe_key;
+  Vec3 point{};
+};
+
+struct LineQuantity {
+  std::string name;
+  std::string fe_csv;
+  int along = 0;
+  Vec3 through{};
+};
+
+struct StructureCase {
+  std::string name;
+  std::string scene;
+  std::string fe_reference;
+  std::string theory;
+  std::vector<PointQuantity> quantities;
+  std::vector<LineQuantity> lines;
+  std::map<std::string, double> gate;
+  double fast_spacing = 0;
+  std::map<std::string, double> fast_stored;
+  double fast_regression_tolerance = 0;
+  std::map<std::string, double> fast_gate;
+  /// Accuracy-vs-time sweep: each knob is varied on its own around the scene's settings.
+  std::vector<double> sweep_spacing;
+  std::vector<double> sweep_horizon_factor;
+  std::vector<std::string> sweep_stretch;
+  std::vector<double> sweep_force_tolerance;
+};
+
+Vec3 read_vec3(const YAML::Node& n) {
+  Vec3 v{0, 0, 0};
+  for (std::size_t k = 0; k < n.size() && k < 3; ++k) {
+    v[k] = n[k].as<double>();
+  }
+  return v;
+}
+
+int axis_of(const std::string& s) {
+  if (s == "x") {
+    return 0;
+  }
+  if (s == "y") {
+    return 1;
+  }
+  if (s == "z") {
+    return 2;
+  }
+  throw std::runtime_error("axis must be x, y or z, got '" + s + "'");
+}
+
+std::map<std::string, double> read_map(const YAML::Node& n) {
+  std::map<std::string, double> m;
+  if (n) {
+    for (const auto& kv : n) {
+      m[kv.first.as<std::string>()] = kv.second.as<double>();
+    }
+  }
+  return m;
+}
+
+StructureCase load_case(const std::filesystem::path& file) {
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(file.string());
+  } catch (const YAML::Exception& e) {
+    throw std::runtime_error(
+        fmt::format("{}:{}:{}: {}", file.string(), e.mark.line + 1, e.mark.column + 1, e.msg));
+  }
+  StructureCase c;
+  try {
+    c.name = root["case"].as<std::string>();
+    c.scene = root["scene"].as<std::string>();
+    c.fe_reference = root["fe_reference"].as<std::string>();
+    c.theory = root["theory"].as<std::string>();
+    for (const auto& q : root["quantities"]) {
+      c.quantities.push_back(
+          {q["name"].as<std::string>(), q["fe"].as<std::string>(), read_vec3(q["point"])});
+    }
+    for (const auto& l : root["lines"]) {
+      c.lines.push_back({l["name"].as<std::string>(), l["fe_csv"].as<std::string>(),
+                         axis_of(l["along"].as<std::string>()), read_vec3(l["through"])});
+    }
+    c.gate = read_map(root["gate"]);
+    if (const auto fast = root["fast"]) {
+      c.fast_spacing = fast["spacing"].as<double>();
+      c.fast_stored = read_map(fast["stored"]);
+      c.fast_regression_tolerance = fast["regression_tolerance"].as<double>(0.0);
+      c.fast_gate = read_map(fast["gate"]);
+    }
+    if (const auto sw = root["sweep"]) {
+      c.sweep_spacing = sw["spacing"].as<std::vector<double>>(std::vector<double>{});
+      c.sweep_horizon_factor = sw["horizon_factor"].as<std::vector<double>>(std::vector<double>{});
+      c.sweep_stretch = sw["stretch"].as<std::vector<std::string>>(std::vector<std::string>{});
+      c.sweep_force_tolerance =
+          sw["force_tolerance"].as<std::vector<double>>(std::vector<double>{});
+    }
+  } catch (const YAML::Exception& e) {
+    throw std::runtime_error(fmt::format("{}:{}:{}: bad case description: {}", file.string(),
+                                         e.mark.line + 1, e.mark.column + 1, e.msg));
+  }
+  return c;
+}
+
+/// Deflection sampled along a line of the FE solution: (position along the line's axis, value).
+std::vector<std::pair<double, double>> load_fe_line(const std::filesystem::path& csv, int along) {
+  std::ifstream in(csv);
+  if (!in) {
+    throw std::runtime_error("cannot read FE line " + csv.string() +
+                             " (run pd-fem to regenerate fem_reference/reference)");
+  }
+  std::string header;
+  std::getline(in, header);
+  std::vector<std::string> names;
+  {
+    std::stringstream hs(header);
+    std::string col;
+    while (std::getline(hs, col, ',')) {
+      names.push_back(col);
+    }
+  }
+  const auto find = [&](const std::string& n) {
+    const auto it = std::find(names.begin(), names.end(), n);
+    if (it == names.end()) {
+      throw std::runtime_error(csv.string() + ": no column '" + n + "'");
+    }
+    return static_cast<std::size_t>(it - names.begin());
+  };
+  const std::size_t col_pos = find(std::string(1, "xyz"[along]));
+  const std::size_t col_val = find("deflection");
+  std::vector<std::pair<double, double>> out;
+  std::string line;
+  while (std::getline(in, line)) {
+    std::vector<double> v;
+    std::stringstream ls(line);
+    std::string cell;
+    while (std::getline(ls, cell, ',')) {
+      v.push_back(std::stod(cell));
+    }
+    if (v.size() > std::max(col_pos, col_val)) {
+      out.emplace_back(v[col_pos], v[col_val]);
+    }
+  }
+  return out;
+}
+
+double interpolate(const std::vector<std::pair<double, double>>& f, double x) {
+  if (f.empty()) {
+    return std::nan("");
+  }
+  if (x <= f.front().first) {
+    return f.front().second;
+  }
+  for (std::size_t k = 1; k < f.size(); ++k) {
+    if (x <= f[k].first) {
+      const double w = (x - f[k - 1].first) / (f[k].first - f[k - 1].first);
+      return (1 - w) * f[k - 1].second + w * f[k].second;
+    }
+  }
+  return f.back().second;
+}
+
+/// Downward deflection −u_z of the final PD field, interpolated from lattice layers.
+class DeflectionField {
+public:
+  DeflectionField(const RunOutcome& run, const LatticeSpec& lattice, const Region& body)
+      : run_(run), lattice_(lattice) {
+    const double tol = 1e-6 * lattice.spacing;
+    for (std::size_t i = 0; i < run.positions.size(); ++i) {
+      if (!body.contains(run.positions[i], 3, tol)) {
+        continue; // supports are not part of the measured body
+      }
+      std::array<long long, 3> key{};
+      for (int a = 0; a < 3; ++a) {
+        key[a] = index(a, run.positions[i][a]);
+        layers_[a].insert(key[a]);
+      }
+      particle_[key] = i;
+    }
+  }
+
+  /// Interpolated deflection at p; each coordinate with `use[a] = false` is taken from `key`
+  /// instead.
+  double at(const Vec3& p) const {
+    std::array<std::array<std::pair<long long, double>, 2>, 3> w{};
+    for (int a = 0; a < 3; ++a) {
+      w[a] = weights(a, p[a]);
+    }
+    double sum = 0;
+    for (const auto& [i, wi] : w[0]) {
+      for (const auto& [j, wj] : w[1]) {
+        for (const auto& [k, wk] : w[2]) {
+          const auto it = particle_.find({i, j, k});
+          if (it == particle_.end()) {
+            return std::nan("");
+          }
+          sum += wi * wj * wk * -run_.displacement[3 * it->second + 2];
+        }
+      }
+    }
+    return sum;
+  }
+
+  /// Positions of the particle layers along an axis.
+  std::vector<double> layer_positions(int axis) const {
+    std::vector<double> out;
+    for (long long n : layers_[axis]) {
+      out.push_back(coordinate(axis, n));
+    }
+    return out;
+  }
+
+private:
+  double shift() const {
+    return lattice_.convention == LatticeConvention::cell_centered ? 0.5 : 0.0;
+  }
+  long long index(int a, double x) const {
+    return std::llround((x - lattice_.origin[a]) / lattice_.spacing - shift());
+  }
+  double coordinate(int a, long long n) const {
+    return lattice_.origin[a] + (static_cast<double>(n) + shift()) * lattice_.spacing;
+  }
+  /// The two layers bracketing x (or the two outermost for x beyond the outer layer) and their
+  /// linear weights.
+  std::array<std::pair<long long, double>, 2> weights(int a, double x) const {
+    const auto& l = layers_[a];
+    if (l.size() < 2) {
+      throw std::runtime_error("deflection field: fewer than two particle layers");
+    }
+    const double t = (x - lattice_.origin[a]) / lattice_.spacing - shift();
+    long long lo = static_cast<long long>(std::floor(t));
+    lo = std::clamp(lo, *l.begin(), *std::prev(l.end(), 2));
+    const double w = t - static_cast<double>(lo);
+    if (std::abs(w) < 1e-9) {
+      return {{{lo, 1.0}, {lo + 1, 0.0}}};
+    }
+    return {{{lo, 1.0 - w}, {lo + 1, w}}};
+  }
+
+  const RunOutcome& run_;
+  LatticeSpec lattice_;
+  std::array<std::set<long long>, 3> layers_;
+  std::map<std::array<long long, 3>, std::size_t> particle_;
+};
+
+/// Apply a different spacing (CI variant, sweeps): the load layers follow the top particle layer.
+void set_spacing(Scene& scene, double spacing) {
+  const double old = scene.model.lattice.spacing;
+  scene.model.lattice.spacing = spacing;
+  for (LoadSpec& l : scene.model.loads) {
+    for (Box& b : l.load.region.boxes) {
+      if (b.hi[2] - b.lo[2] < old) { // a single top layer: keep it a single layer
+        b.lo[2] = b.hi[2] - 0.5 * spacing;
+      }
+    }
+  }
+}
+
+Json run_once(const Scene& scene, const StructureCase& c, const Context& ctx,
+              const std::string& tag, std::map<std::string, double>& values,
+              std::map<std::string, double>& line_error, RunOutcome& outcome,
+              bool write_vtu = true) {
+  RunOptions opt;
+  opt.output_dir = ctx.output_dir / (c.name + tag);
+  opt.write_vtu = write_vtu;
+  opt.progress = ctx.progress;
+  opt.keep_final_field = true;
+  outcome = run_scene(scene, opt);
+  if (outcome.result.status == RunStatus::unstable) {
+    throw std::runtime_error(c.name + ": " + outcome.result.message);
+  }
+  const DeflectionField field(outcome, scene.model.lattice, scene.model.bodies.front().region);
+  for (const auto& q : c.quantities) {
+    values[q.name] = field.at(q.point);
+  }
+  Json lines = Json::object();
+  for (const auto& l : c.lines) {
+    const auto fe = load_fe_line(std::filesystem::path(PD_FEM_REFERENCE_DIR) / l.fe_csv, l.along);
+    double fe_max = 0;
+    for (const auto& [x, v] : fe) {
+      fe_max = std::max(fe_max, std::abs(v));
+    }
+    Json rows = Json::array();
+    double worst = 0;
+    for (double x : field.layer_positions(l.along)) {
+      Vec3 p = l.through;
+      p[l.along] = x;
+      const double pd_value = field.at(p);
+      const double fe_value = interpolate(fe, x);
+      worst = std::max(worst, std::abs(pd_value - fe_value) / fe_max);
+      rows.push_back(Json(Json::Array{x, pd_value, fe_value}));
+    }
+    line_error[l.name] = worst;
+    Json& lj = lines[l.name];
+    lj["columns"] = Json::array_of(std::vector<std::string>{"position", "pd", "fe"});
+    lj["rows"] = rows;
+    lj["max_difference_over_max_fe"] = worst;
+  }
+  return lines;
+}
+
+YAML::Node load_fe_summary(const std::string& name) {
+  const auto path = std::filesystem::path(PD_FEM_REFERENCE_DIR) / (name + ".json");
+  try {
+    return YAML::LoadFile(path.string());
+  } catch (const YAML::Exception& e) {
+    throw std::runtime_error("cannot read FE reference " + path.string() + ": " + e.msg);
+  }
+}
+
+Json run_structure(const Context& ctx, const std::string& case_name, bool fast) {
+  const StructureCase c =
+      load_case(ctx.scenes_dir.parent_path() / "cases" / (case_name + ".case.yaml"));
+  Scene scene = load_scene((ctx.scenes_dir / c.scene).string());
+  if (fast) {
+    set_spacing(scene, c.fast_spacing);
+  }
+  const YAML::Node fe = load_fe_summary(c.fe_reference);
+
+  std::map<std::string, double> values, line_error;
+  RunOutcome run;
+  Json lines = run_once(scene, c, ctx, fast ? "-fast" : "", values, line_error, run);
+
+  Json out;
+  out["case"] = c.name + (fast ? "-fast" : "");
+  std::vector<std::string> names;
+  for (const auto& q : c.quantities) {
+    names.push_back(q.name);
+  }
+  out["quantity"] = fmt::format("downward deflection at {} (m)", fmt::join(names, ", "));
+  bool passed = run.result.status == RunStatus::converged;
+  for (const auto& q : c.quantities) {
+    const double fe_value = fe["quantities"][q.fe_key]["extrapolated"].as<double>();
+    out["pd"][q.name] = values[q.name];
+    out["reference"][q.name]["fe"] = fe_value;
+    out["reference"][q.name]["fe_relative_error_estimate"] =
+        fe["quantities"][q.fe_key]["relative_error_estimate"].as<double>();
+    const double err = relative_error(values[q.name], fe_value);
+    out["error"][q.name + "_vs_fe"] = err;
+    // Theory values as the FE program computed them (one formula, one place).
+    const YAML::Node th = fe["theory"];
+    if (th["euler_bernoulli"]) {
+      out["reference"][q.name]["euler_bernoulli"] = th["euler_bernoulli"].as<double>();
+      out["reference"][q.name]["timoshenko"] = th["timoshenko"].as<double>();
+      out["error"][q.name + "_vs_euler_bernoulli"] =
+          relative_error(values[q.name], th["euler_bernoulli"].as<double>());
+      out["error"][q.name + "_vs_timoshenko"] =
+          relative_error(values[q.name], th["timoshenko"].as<double>());
+    } else if (th["quantities"] && th["quantities"][q.fe_key]) {
+      const double k = th["quantities"][q.fe_key]["kirchhoff"].as<double>();
+      out["reference"][q.name]["kirchhoff"] = k;
+      out["error"][q.name + "_vs_kirchhoff"] = relative_error(values[q.name], k);
+    }
+    const auto& gates = fast ? c.fast_gate : c.gate;
+    if (const auto g = gates.find(q.name); g != gates.end()) {
+      out["gate"][q.name + "_vs_fe"] = g->second;
+      passed = passed && err <= g->second;
+    }
+    if (fast) {
+      if (const auto s = c.fast_stored.find(q.name); s != c.fast_stored.end()) {
+        const double drift = relative_error(values[q.name], s->second);
+        out["regression"][q.name]["stored"] = s->second;
+        out["regression"][q.name]["relative_change"] = drift;
+        out["regression"][q.name]["tolerance"] = c.fast_regression_tolerance;
+        passed = passed && drift <= c.fast_regression_tolerance;
+      }
+    }
+  }
+  for (const auto& [name, e] : line_error) {
+    out["error"]["line_" + name + "_max_over_max_fe"] = e;
+  }
+  out["lines"] = lines;
+  out["wall_seconds_run"] = run.result.wall_seconds;
+  out["steps"] = run.result.steps;
+  out["bond_updates"] =
+      static_cast<double>(run.bonds) * static_cast<double>(run.result.force_evaluations);
+  out["particles"] = run.particles;
+  out["bonds"] = run.bonds;
+  Json& settings = out["settings"];
+  settings["spacing"] = scene.model.lattice.spacing;
+  settings["horizon_factor"] = scene.model.lattice.horizon_factor;
+  settings["stretch"] = to_string(scene.model.effects.stretch);
+  settings["integrator"] = to_string(scene.solver.integrator);
+  settings["force_tolerance"] = scene.solver.steady.force_tolerance;
+  settings["kinetic_tolerance"] = scene.solver.steady.kinetic_tolerance;
+  settings["run"] = run.summary;
+
+  if (!fast) {
+    // Relaxation error: the same model relaxed 100× further.
+    Scene tight = scene;
+    tight.solver.steady.force_tolerance *= 0.01;
+    tight.solver.steady.kinetic_tolerance *= 0.01;
+    tight.solver.end_time = scene.solver.end_time.value_or(0) * 10;
+    std::map<std::string, double> tight_values, tight_lines;
+    RunOutcome tight_run;
+    run_once(tight, c, ctx, "-tight", tight_values, tight_lines, tight_run);
+    for (const auto& q : c.quantities) {
+      out["relaxation"][q.name]["tight_tolerance_value"] = tight_values[q.name];
+      out["relaxation"][q.name]["relaxation_error"] =
+          relative_error(values[q.name], tight_values[q.name]);
+      out["relaxation"][q.name]["discretisation_error_vs_fe"] = relative_error(
+          tight_values[q.name], fe["quantities"][q.fe_key]["extrapolated"].as<double>());
+    }
+    out["relaxation"]["tight_steps"] = tight_run.result.steps;
+    out["relaxation"]["tight_wall_seconds"] = tight_run.result.wall_seconds;
+  }
+  out["passed"] = passed;
+
+  for (const auto& q : c.quantities) {
+    const double fe_value = fe["quantities"][q.fe_key]["extrapolated"].as<double>();
+    fmt::print("   {} = {:.6e} m vs FE {:.6e} m: error {:.2f} % (gate {})\n", q.name,
+               values[q.name], fe_value, 100 * relative_error(values[q.name], fe_value),
+               (fast ? c.fast_gate : c.gate).count(q.name)
+                   ? fmt::format("{:.1f} %", 100 * (fast ? c.fast_gate : c.gate).at(q.name))
+                   : std::string("none"));
+  }
+  fmt::print("   {} particles, {} bonds, {} steps, {:.1f} s, status {}\n", run.particles, run.bonds,
+             run.result.steps, run.result.wall_seconds, to_string(run.result.status));
+  return out;
+}
+
+StretchKind stretch_from(const std::string& s) {
+  if (s == "exact") {
+    return StretchKind::exact;
+  }
+  if (s == "modified") {
+    return StretchKind::modified;
+  }
+  if (s == "fast") {
+    return StretchKind::fast;
+  }
+  throw std::runtime_error("unknown stretch measure '" + s + "' in a sweep");
+}
+
+std::string correction_name(SurfaceCorrection s) {
+  switch (s) {
+  case SurfaceCorrection::none:
+    return "none";
+  case SurfaceCorrection::volume:
+    return "volume";
+  case SurfaceCorrection::energy:
+    return "energy";
+  case SurfaceCorrection::macek_silling:
+    return "macek-silling";
+  }
+  return "?";
+}
+
+std::string correction_name(VolumeCorrection v) {
+  switch (v) {
+  case VolumeCorrection::none:
+    return "none";
+  case VolumeCorrection::linear:
+    return "linear";
+  case VolumeCorrection::exact:
+    return "exact";
+  }
+  return "?";
+}
+
+/// Least-squares slope of log(error) against log(spacing): the observed convergence order.
+double observed_order(const std::vector<std::pair<double, double>>& spacing_error) {
+  double sx = 0, sy = 0, sxx = 0, sxy = 0;
+  const double n = static_cast<double>(spacing_error.size());
+  for (const auto& [h, e] : spacing_error) {
+    const double x = std::log(h), y = std::log(e);
+    sx += x;
+    sy += y;
+    sxx += x * x;
+    sxy += x * y;
+  }
+  return (n * sxy - sx * sy) / (n * sxx - sx * sx);
+}
+
+/// One row per run: each knob varied on its own around the scene's settings (the baseline).
+Json run_structure_sweep(const Context& ctx, const std::string& case_name) {
+  const StructureCase c =
+      load_case(ctx.scenes_dir.parent_path() / "cases" / (case_name + ".case.yaml"));
+  const Scene base = load_scene((ctx.scenes_dir / c.scene).string());
+  const YAML::Node fe = load_fe_summary(c.fe_reference);
+
+  struct Variant {
+    std::string knob;
+    std::string value;
+    Scene scene;
+  };
+  std::vector<Variant> variants{{"baseline", "scene", base}};
+  for (double h : c.sweep_spacing) {
+    Scene s = base;
+    set_spacing(s, h);
+    variants.push_back({"spacing", fmt::format("{:.6g}", h), s});
+  }
+  for (double m : c.sweep_horizon_factor) {
+    Scene s = base;
+    s.model.lattice.horizon_factor = m;
+    variants.push_back({"horizon_factor", fmt::format("{:.6g}", m), s});
+  }
+  for (const auto& name : c.sweep_stretch) {
+    Scene s = base;
+    s.model.effects.stretch = stretch_from(name);
+    variants.push_back({"stretch", name, s});
+  }
+  if (base.model.surface_correction != SurfaceCorrection::none) {
+    Scene s = base;
+    s.model.surface_correction = SurfaceCorrection::none;
+    variants.push_back({"surface_correction", "none", s});
+  }
+  if (base.model.volume_correction != VolumeCorrection::none) {
+    Scene s = base;
+    s.model.volume_correction = VolumeCorrection::none;
+    variants.push_back({"volume_correction", "none", s});
+  }
+  for (double t : c.sweep_force_tolerance) {
+    Scene s = base;
+    s.solver.steady.force_tolerance = t;
+    s.solver.steady.kinetic_tolerance = base.solver.steady.kinetic_tolerance *
+                                        (t / base.solver.steady.force_tolerance) *
+                                        (t / base.solver.steady.force_tolerance);
+    variants.push_back({"force_tolerance", fmt::format("{:.3g}", t), s});
+  }
+
+  std::string rows_text;
+  Json rows = Json::array();
+  std::vector<std::pair<double, double>> spacing_error;
+  const std::string first_quantity = c.quantities.front().name;
+  const double first_fe =
+      fe["quantities"][c.quantities.front().fe_key]["extrapolated"].as<double>();
+  std::size_t k = 0;
+  for (const Variant& v : variants) {
+    ++k;
+    fmt::print("   [{}/{}] {} = {} ...\n", k, variants.size(), v.knob, v.value);
+    std::fflush(stdout);
+    std::map<std::string, double> values, line_error;
+    RunOutcome run;
+    run_once(v.scene, c, ctx, "-sweep-" + v.knob + "-" + v.value, values, line_error, run, false);
+    Json row;
+    row["case"] = c.name;
+    row["knob"] = v.knob;
+    row["knob_value"] = v.value;
+    row["spacing"] = v.scene.model.lattice.spacing;
+    row["horizon_factor"] = v.scene.model.lattice.horizon_factor;
+    row["stretch"] = to_string(v.scene.model.effects.stretch);
+    row["surface_correction"] = correction_name(v.scene.model.surface_correction);
+    row["volume_correction"] = correction_name(v.scene.model.volume_correction);
+    row["force_tolerance"] = v.scene.solver.steady.force_tolerance;
+    row["status"] = to_string(run.result.status);
+    for (const auto& q : c.quantities) {
+      const double fe_value = fe["quantities"][q.fe_key]["extrapolated"].as<double>();
+      row["pd"][q.name] = values[q.name];
+      row["error_vs_fe"][q.name] = relative_error(values[q.name], fe_value);
+    }
+    row["wall_seconds"] = run.result.wall_seconds;
+    row["setup_seconds"] = run.setup_seconds;
+    row["steps"] = run.result.steps;
+    row["bond_updates"] =
+        static_cast<double>(run.bonds) * static_cast<double>(run.result.force_evaluations);
+    row["particles"] = run.particles;
+    row["bonds"] = run.bonds;
+    if (v.knob == "spacing" || v.knob == "baseline") {
+      spacing_error.emplace_back(v.scene.model.lattice.spacing,
+                                 relative_error(values[first_quantity], first_fe));
+    }
+    fmt::print("         error {:.3f} % in {:.1f} s ({} particles)\n",
+               100 * relative_error(values[first_quantity], first_fe), run.result.wall_seconds,
+               run.particles);
+    rows_text += row.dump(0);
+    rows.push_back(std::move(row));
+    // Rows are appended to the JSON-lines file as they come, so an interrupted sweep keeps them.
+    write_file_atomically(ctx.output_dir / (c.name + "-sweep.jsonl"), rows_text);
+  }
+  std::sort(spacing_error.begin(), spacing_error.end());
+  spacing_error.erase(std::unique(spacing_error.begin(), spacing_error.end(),
+                                  [](const auto& a, const auto& b) { return a.first == b.first; }),
+                      spacing_error.end());
+  Json out;
+  out["case"] = c.name + "-sweep";
+  out["quantity"] = "error vs FE and wall time for each knob (rows in " + c.name + "-sweep.jsonl)";
+  out["rows"] = rows;
+  if (spacing_error.size() >= 2) {
+    out["observed_order_in_spacing"] = observed_order(spacing_error);
+  }
+  out["gate"] = "none: a measurement";
+  out["passed"] = true;
+  return out;
+}
+
+} // namespace
+
+Json run_clamped_beam(const Context& ctx) {
+  return run_structure(ctx, "clamped-beam", false);
+}
+Json run_cantilever(const Context& ctx) {
+  return run_structure(ctx, "cantilever", false);
+}
+Json run_plate(const Context& ctx) {
+  return run_structure(ctx, "plate-3clamped", false);
+}
+Json run_clamped_beam_fast(const Context& ctx) {
+  return run_structure(ctx, "clamped-beam", true);
+}
+Json run_cantilever_fast(const Context& ctx) {
+  return run_structure(ctx, "cantilever", true);
+}
+Json run_plate_fast(const Context& ctx) {
+  return run_structure(ctx, "plate-3clamped", true);
+}
+
+} // namespace pd::verification
+
+namespace pd::verification {
+Json run_clamped_beam_sweep(const Context& ctx) {
+  return run_structure_sweep(ctx, "clamped-beam");
+}
+Json run_cantilever_sweep(const Context& ctx) {
+  return run_structure_sweep(ctx, "cantilever");
+}
+Json run_plate_sweep(const Context& ctx) {
+  return run_structure_sweep(ctx, "plate-3clamped");
+}
+} // namespace pd::verification
