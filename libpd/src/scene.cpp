@@ -418,8 +418,9 @@ constexpr Key model_keys[] = {
      .fallback = "none"},
     {.name = "volume_correction",
      .type = Type::choice,
-     .doc = "partial volume of neighbour cells cut by the horizon",
-     .choices = "none|linear|exact",
+     .doc = "bond quadrature weights: partial volume of cut cells (linear, exact) or "
+            "moment-matched lattice weights (moment)",
+     .choices = "none|linear|exact|moment",
      .fallback = "none"},
 };
 constexpr Section model_section{"under 'model'", model_keys};

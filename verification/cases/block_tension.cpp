@@ -1,26 +1,114 @@
 // block-tension (Pasupathy, Table 1): 1 × 0.1 × 0.1 m block, left end held, 200 MPa on the right
 // end. Uniaxial stress gives u_x(x) = σx/E along the centre line and a lateral strain −νσ/E with
 // the bond-based ν = 1/4. Without surface correction the outer particles are too soft, so the
-// block stretches more than σL/E; the error is reported, the gate comes with the corrections.
+// block stretches more than σL/E (+19 %) and contracts more than νσ/E (+42 %).
+//
+// `block-tension` runs the scene with the corrections it lists (the chosen default, see
+// scenes/block-tension.yaml) and gates the two errors. `block-tension-corrections` (slow, label
+// verification-full) runs every surface × volume correction and a δ/λ sweep at fixed λ and at
+// fixed δ, and reports the same errors; it gates nothing.
+//
+// Where the lateral error comes from (measured, issue 4): at δ = 3.015λ the discrete cubic lattice
+// itself has a Poisson ratio of 0.268–0.278 instead of 1/4 (patch-test, bulk_lattice_elastic_
+// constants: central pair forces give C12 = C44, and the lattice sums make C44/C11 too large).
+// A scalar factor per bond, which every surface correction is, scales C11 and C12 alike in the
+// bulk and cannot change that ratio, so the lateral contraction stays ≥ 7 % too large however
+// well the surface is corrected. It is not the clamp (the same error at x = 0.245 m and 0.495 m)
+// and hardly the probe rows (interior rows y = 0.035/0.065 m give +5.3 %, outer rows +9.0 % with
+// energy + exact), and refining λ at fixed δ/λ keeps the same lattice sums.
 #include "cases.hpp"
+#include "libpd/corrections.hpp"
 #include "libpd/run.hpp"
 #include "libpd/scene.hpp"
 
+#include <array>
+#include <chrono>
+#include <cmath>
 #include <fmt/format.h>
+#include <numbers>
+#include <string>
 
 namespace pd::verification {
 
-Json run_block_tension(const Context& ctx) {
-  const Scene scene = load_scene((ctx.scenes_dir / "block-tension.yaml").string());
+namespace {
+
+constexpr double elongation_gate = 0.01;
+constexpr double lateral_gate = 0.05;
+
+// Correction names in enum order, so that index = enum value.
+const auto surface_names = [] {
+  std::array<const char*, all_surface_corrections.size()> names{};
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    names[i] = to_string(all_surface_corrections[i]);
+  }
+  return names;
+}();
+const auto volume_names = [] {
+  std::array<const char*, all_volume_corrections.size()> names{};
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    names[i] = to_string(all_volume_corrections[i]);
+  }
+  return names;
+}();
+
+Box box(const Vec3& lo, const Vec3& hi) {
+  return Box{lo, hi};
+}
+
+/// The block-tension scene at another spacing λ and δ/λ: the grip gets ⌊δ/λ⌋ fixed layers (all
+/// that reach the first block layer, 3 as in the scene for δ = 3.015λ), the
+/// load the last particle layer, and the probes the centre line and the outer rows at mid-length
+/// of the new lattice (cell-centred: particles at (k + ½)λ).
+Scene variant(const Scene& base, double spacing, double m) {
+  Scene s = base;
+  const Box block = base.model.bodies.front().region.boxes.front();
+  const double L = block.hi[0], W = block.hi[1], H = block.hi[2];
+  const double l = spacing;
+  s.model.lattice.spacing = l;
+  s.model.lattice.horizon_factor = m;
+  const double grip = std::floor(m + 1e-9) * l;
+  s.model.bodies.at(1).region.boxes = {box({-grip, 0, 0}, {0, W, H})};
+  s.model.supports.at(0).region.boxes = {box({-grip, 0, 0}, {0, W, H})};
+  s.model.loads.at(0).load.region.boxes = {box({L - l, 0, 0}, {L, W, H})};
+  // Centre line: the particles within λ of (y, z) = (W/2, H/2): one row (odd count) or the four
+  // around it (even count), symmetric either way.
+  for (ProbeSpec& p : s.probes) {
+    p.kind = ProbeSpec::Kind::region;
+    if (p.name == "end_displacement") {
+      p.region.boxes = {box({L - l, W / 2 - l, H / 2 - l}, {L, W / 2 + l, H / 2 + l})};
+    } else if (p.name == "mid_displacement") {
+      p.region.boxes = {box({L / 2 - l, W / 2 - l, H / 2 - l}, {L / 2, W / 2 + l, H / 2 + l})};
+    } else if (p.name == "mid_top_y") {
+      p.region.boxes = {box({L / 2 - l, W - l, H / 2 - l}, {L / 2, W, H / 2 + l})};
+    } else if (p.name == "mid_bottom_y") {
+      p.region.boxes = {box({L / 2 - l, 0, H / 2 - l}, {L / 2, l, H / 2 + l})};
+    }
+  }
+  return s;
+}
+
+struct BlockResult {
+  Json json;
+  double elongation_error = 0;
+  double lateral_error = 0;
+  bool converged = false;
+};
+
+BlockResult run_block(const Scene& scene, const std::filesystem::path& out_dir, bool progress) {
   RunOptions opt;
-  opt.output_dir = ctx.output_dir / "block-tension";
-  opt.progress = ctx.progress;
+  opt.output_dir = out_dir;
+  opt.progress = progress;
+  opt.write_vtu = !out_dir.empty();
   const RunOutcome run = run_scene(scene, opt);
 
+  const Box block = scene.model.bodies.front().region.boxes.front();
+  const double l = scene.model.lattice.spacing;
   const double E = scene.model.materials.front().youngs_modulus;
   const double sigma = scene.model.loads.front().load.value[0];
   const double nu = 0.25; // bond-based PD in 3D
-  const double x_end = 0.995, x_mid = 0.495, width = 0.09;
+  // Probe particles sit half a spacing inside the faces (cell-centred lattice).
+  const double x_end = block.hi[0] - 0.5 * l, x_mid = 0.5 * block.hi[0] - 0.5 * l;
+  const double width = block.hi[1] - l;
   const double elongation_ref = sigma * x_end / E;
   const double mid_ref = sigma * x_mid / E;
   const double lateral_ref = -nu * sigma / E;
@@ -28,29 +116,126 @@ Json run_block_tension(const Context& ctx) {
   const double mid = run.probes.at("mid_displacement");
   const double lateral = (run.probes.at("mid_top_y") - run.probes.at("mid_bottom_y")) / width;
 
-  Json out;
-  out["case"] = "block-tension";
-  out["quantity"] = "centre-line u_x at x = 0.995 m and lateral strain at mid-length";
+  BlockResult r;
+  r.elongation_error = relative_error(elongation, elongation_ref);
+  r.lateral_error = relative_error(lateral, lateral_ref);
+  r.converged = run.result.status == RunStatus::converged;
+  Json& out = r.json;
+  out["surface_correction"] =
+      surface_names[static_cast<std::size_t>(scene.model.surface_correction)];
+  out["volume_correction"] = volume_names[static_cast<std::size_t>(scene.model.volume_correction)];
+  out["spacing"] = l;
+  out["horizon_factor"] = scene.model.lattice.horizon_factor;
+  out["horizon"] = scene.model.lattice.horizon();
   out["pd"]["end_displacement"] = elongation;
   out["pd"]["mid_displacement"] = mid;
   out["pd"]["lateral_strain"] = lateral;
   out["reference"]["end_displacement"] = elongation_ref;
   out["reference"]["mid_displacement"] = mid_ref;
   out["reference"]["lateral_strain"] = lateral_ref;
-  out["error"]["elongation"] = relative_error(elongation, elongation_ref);
+  // Signed errors too: + means too soft (too long, too much contraction).
+  out["error"]["elongation"] = r.elongation_error;
   out["error"]["mid_displacement"] = relative_error(mid, mid_ref);
-  out["error"]["lateral_contraction"] = relative_error(lateral, lateral_ref);
-  out["gate"] = "none yet: reported only (gates arrive with the surface-correction issue)";
+  out["error"]["lateral_contraction"] = r.lateral_error;
+  out["signed_error"]["elongation"] = elongation / elongation_ref - 1.0;
+  out["signed_error"]["lateral_contraction"] = lateral / lateral_ref - 1.0;
   out["steady_state"]["status"] = to_string(run.result.status);
   out["steady_state"]["residual"] = run.result.residual;
+  out["steps"] = run.result.steps;
+  out["setup_seconds"] = run.setup_seconds;
+  out["particles"] = run.particles;
+  out["bonds"] = run.bonds;
   out["run"] = run.summary;
-  out["passed"] = run.result.status == RunStatus::converged;
-  fmt::print(
-      "   u_x(0.995) = {:.6e} m vs sigma x/E = {:.6e} m (error {:.2f} %); lateral strain {:.4e} "
-      "vs {:.4e} (error {:.2f} %); {} after {} steps\n",
-      elongation, elongation_ref, 100 * relative_error(elongation, elongation_ref), lateral,
-      lateral_ref, 100 * relative_error(lateral, lateral_ref), to_string(run.result.status),
-      run.result.steps);
+  return r;
+}
+
+std::string describe(const BlockResult& r, const Scene& s) {
+  return fmt::format(
+      "{:<14} {:<7} λ = {:.5f} m, δ/λ = {:.4f}: elongation {:+7.2f} %, lateral contraction "
+      "{:+7.2f} % ({}, {} steps)",
+      surface_names[static_cast<std::size_t>(s.model.surface_correction)],
+      volume_names[static_cast<std::size_t>(s.model.volume_correction)], s.model.lattice.spacing,
+      s.model.lattice.horizon_factor,
+      100 * *r.json.find("signed_error")->find("elongation")->number(),
+      100 * *r.json.find("signed_error")->find("lateral_contraction")->number(),
+      r.converged ? "converged" : "NOT converged", *r.json.find("steps")->number());
+}
+
+} // namespace
+
+Json run_block_tension(const Context& ctx) {
+  const Scene base = load_scene((ctx.scenes_dir / "block-tension.yaml").string());
+  const Scene scene = variant(base, base.model.lattice.spacing, base.model.lattice.horizon_factor);
+  BlockResult r = run_block(scene, ctx.output_dir / "block-tension", ctx.progress);
+  Json out;
+  out["case"] = "block-tension";
+  out["quantity"] = "centre-line u_x at the loaded end and lateral strain at mid-length";
+  for (const char* key : {"surface_correction", "volume_correction", "pd", "reference", "error",
+                          "signed_error", "steady_state", "steps", "setup_seconds", "run"}) {
+    out[key] = *r.json.find(key);
+  }
+  out["gate"] = fmt::format("elongation error <= {:g} %, lateral contraction error <= {:g} %, "
+                            "steady state reached",
+                            100 * elongation_gate, 100 * lateral_gate);
+  out["passed"] =
+      r.converged && r.elongation_error <= elongation_gate && r.lateral_error <= lateral_gate;
+  fmt::print("   {}\n", describe(r, scene));
+  return out;
+}
+
+Json run_block_tension_corrections(const Context& ctx) {
+  const auto start = std::chrono::steady_clock::now();
+  const Scene base = load_scene((ctx.scenes_dir / "block-tension.yaml").string());
+  const double spacing = base.model.lattice.spacing, m0 = base.model.lattice.horizon_factor;
+  Json out;
+  out["case"] = "block-tension-corrections";
+  out["quantity"] = "block-tension elongation and lateral-contraction errors for every surface x "
+                    "volume correction, and their dependence on delta/lambda";
+  Json combos = Json::array();
+  for (std::size_t s = 0; s < surface_names.size(); ++s) {
+    for (std::size_t v = 0; v < volume_names.size(); ++v) {
+      Scene scene = variant(base, spacing, m0);
+      scene.model.surface_correction = static_cast<SurfaceCorrection>(s);
+      scene.model.volume_correction = static_cast<VolumeCorrection>(v);
+      const BlockResult r = run_block(scene, {}, ctx.progress);
+      fmt::print("   {}\n", describe(r, scene));
+      std::fflush(stdout);
+      combos.push_back(r.json);
+    }
+  }
+  out["combinations"] = combos;
+
+  // δ/λ sweep for no correction and for the scene's (default) corrections: at fixed λ, and at
+  // fixed δ = 0.05 m with λ = 0.1/n m (the cross-section must hold whole cells), n = 4, 6, 7, 8
+  // for δ/λ = 2, 3, 3.5 (the nearest to 2√3 that fits), 4.
+  const std::array<double, 4> ms{2.0, 3.0, 2.0 * std::numbers::sqrt3, 4.0};
+  const std::array<int, 4> cells{4, 6, 7, 8};
+  const double fixed_delta = 0.05;
+  Json sweep = Json::array();
+  for (const bool corrected : {false, true}) {
+    for (std::size_t k = 0; k < ms.size(); ++k) {
+      for (const bool fixed_lambda : {true, false}) {
+        const double l = fixed_lambda ? spacing : 0.1 / cells[k];
+        const double m = fixed_lambda ? ms[k] : fixed_delta / l;
+        Scene scene = variant(base, l, m);
+        if (!corrected) {
+          scene.model.surface_correction = SurfaceCorrection::none;
+          scene.model.volume_correction = VolumeCorrection::none;
+        }
+        BlockResult r = run_block(scene, {}, ctx.progress);
+        r.json["sweep"] = fixed_lambda ? "fixed spacing" : "fixed horizon";
+        r.json["nominal_horizon_factor"] = ms[k];
+        fmt::print("   [{}] {}\n", fixed_lambda ? "fixed λ" : "fixed δ", describe(r, scene));
+        std::fflush(stdout);
+        sweep.push_back(r.json);
+      }
+    }
+  }
+  out["m_convergence"] = sweep;
+  out["gate"] = "none: reported only (block-tension gates the default corrections)";
+  out["passed"] = true;
+  out["wall_seconds"] =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return out;
 }
 

@@ -15,6 +15,7 @@
 // paper-resolution case also reruns with a 100× tighter tolerance and reports the difference as
 // the relaxation error, separately from the discretisation error (PD at the tight tolerance vs FE).
 #include "cases.hpp"
+#include "libpd/corrections.hpp"
 #include "libpd/run.hpp"
 #include "libpd/scene.hpp"
 
@@ -472,32 +473,6 @@ StretchKind stretch_from(const std::string& s) {
   throw std::runtime_error("unknown stretch measure '" + s + "' in a sweep");
 }
 
-std::string correction_name(SurfaceCorrection s) {
-  switch (s) {
-  case SurfaceCorrection::none:
-    return "none";
-  case SurfaceCorrection::volume:
-    return "volume";
-  case SurfaceCorrection::energy:
-    return "energy";
-  case SurfaceCorrection::macek_silling:
-    return "macek-silling";
-  }
-  return "?";
-}
-
-std::string correction_name(VolumeCorrection v) {
-  switch (v) {
-  case VolumeCorrection::none:
-    return "none";
-  case VolumeCorrection::linear:
-    return "linear";
-  case VolumeCorrection::exact:
-    return "exact";
-  }
-  return "?";
-}
-
 /// Least-squares slope of log(error) against log(spacing): the observed convergence order.
 double observed_order(const std::vector<std::pair<double, double>>& spacing_error) {
   double sx = 0, sy = 0, sxx = 0, sxy = 0;
@@ -580,8 +555,8 @@ Json run_structure_sweep(const Context& ctx, const std::string& case_name) {
     row["spacing"] = v.scene.model.lattice.spacing;
     row["horizon_factor"] = v.scene.model.lattice.horizon_factor;
     row["stretch"] = to_string(v.scene.model.effects.stretch);
-    row["surface_correction"] = correction_name(v.scene.model.surface_correction);
-    row["volume_correction"] = correction_name(v.scene.model.volume_correction);
+    row["surface_correction"] = to_string(v.scene.model.surface_correction);
+    row["volume_correction"] = to_string(v.scene.model.volume_correction);
     row["force_tolerance"] = v.scene.solver.steady.force_tolerance;
     row["status"] = to_string(run.result.status);
     for (const auto& q : c.quantities) {

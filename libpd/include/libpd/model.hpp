@@ -18,8 +18,10 @@ inline constexpr double no_limit = std::numeric_limits<double>::infinity();
 
 /// Per-bond modifiers of the bond stiffness, beyond the neighbour volume.
 enum class SurfaceCorrection { none, volume, energy, macek_silling };
-/// Partial-volume correction of bonds whose neighbour cell is cut by the horizon.
-enum class VolumeCorrection { none, linear, exact };
+/// Quadrature weights of the bonds: partial-volume corrections of neighbour cells cut by the
+/// horizon (`linear`, `exact`), or lattice weights that reproduce the continuum's fourth moments
+/// (`moment`, see corrections.hpp).
+enum class VolumeCorrection { none, linear, exact, moment };
 
 /// Bond stiffness and strengths. Either one value for the whole body (uniform) or one value per
 /// directed bond (per-bond field): the kernel is compiled for one of the two.

@@ -1,0 +1,431 @@
+// Surface and volume correction factors on small configurations, each against a value computed
+// independently here (closed forms, lattice sums written out, midpoint-grid volumes).
+#include "libpd/corrections.hpp"
+#include "libpd/model.hpp"
+#include "libpd/scene.hpp"
+
+#include <cmath>
+#include <gtest/gtest.h>
+#include <numbers>
+#include <string>
+
+namespace {
+
+constexpr double pi = std::numbers::pi;
+
+pd::ModelSpec block_spec(int dim, double m, std::array<double, 3> size) {
+  pd::ModelSpec spec;
+  spec.dimension.dim = dim;
+  spec.lattice.spacing = 1.0;
+  spec.lattice.horizon_factor = m;
+  pd::Material steel;
+  steel.name = "steel";
+  steel.youngs_modulus = 200e9;
+  steel.density = 7850;
+  spec.materials = {steel};
+  pd::BodySpec body;
+  body.name = "block";
+  body.region.boxes = {pd::Box{{0, 0, 0}, {size[0], size[1], size[2]}}};
+  spec.bodies = {body};
+  return spec;
+}
+
+struct Built {
+  pd::ParticleSet particles;
+  pd::BondFamily family;
+};
+
+Built build(const pd::ModelSpec& spec) {
+  Built b;
+  b.particles = pd::generate_lattice(spec.dimension, spec.lattice, spec.bodies);
+  b.family = pd::build_bond_family(b.particles.position, spec.dimension.dim, spec.lattice.horizon(),
+                                   spec.horizon_rule);
+  return b;
+}
+
+std::size_t particle_at(const pd::ParticleSet& p, const pd::Vec3& x) {
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    if (std::abs(p.position[i][0] - x[0]) + std::abs(p.position[i][1] - x[1]) +
+            std::abs(p.position[i][2] - x[2]) <
+        1e-9) {
+      return i;
+    }
+  }
+  ADD_FAILURE() << "no particle at " << x[0] << ", " << x[1] << ", " << x[2];
+  return 0;
+}
+
+/// Fraction of the cell (edge 1, centred at c) inside the ball of radius R by an n^dim midpoint
+/// grid: an independent check of the adaptive integration (error ~1/n² for a smooth boundary).
+double grid_fraction(int dim, const pd::Vec3& c, double radius, int n) {
+  long long inside = 0, total = 0;
+  const double h = 1.0 / n;
+  for (int i = 0; i < n; ++i) {
+    for (int j = 0; j < (dim > 1 ? n : 1); ++j) {
+      for (int k = 0; k < (dim > 2 ? n : 1); ++k) {
+        const double x = c[0] - 0.5 + (i + 0.5) * h;
+        const double y = dim > 1 ? c[1] - 0.5 + (j + 0.5) * h : 0.0;
+        const double z = dim > 2 ? c[2] - 0.5 + (k + 0.5) * h : 0.0;
+        inside += x * x + y * y + z * z <= radius * radius ? 1 : 0;
+        ++total;
+      }
+    }
+  }
+  return static_cast<double>(inside) / static_cast<double>(total);
+}
+
+// ---- volume corrections -----------------------------------------------------------------------
+
+TEST(VolumeCorrection, LinearRuleValues) {
+  // f = (δ + λ/2 − r)/λ on δ − λ/2 < r ≤ δ, 1 below.
+  const double delta = 3.0, lambda = 1.0;
+  EXPECT_DOUBLE_EQ(pd::volume_fraction(pd::VolumeCorrection::linear, 2.0, delta, lambda), 1.0);
+  EXPECT_DOUBLE_EQ(pd::volume_fraction(pd::VolumeCorrection::linear, 2.5, delta, lambda), 1.0);
+  EXPECT_DOUBLE_EQ(pd::volume_fraction(pd::VolumeCorrection::linear, 2.75, delta, lambda), 0.75);
+  EXPECT_DOUBLE_EQ(pd::volume_fraction(pd::VolumeCorrection::linear, 3.0, delta, lambda), 0.5);
+  EXPECT_DOUBLE_EQ(pd::volume_fraction(pd::VolumeCorrection::none, 3.0, delta, lambda), 1.0);
+}
+
+TEST(VolumeCorrection, ExactClosedForms) {
+  // A unit cell with a corner at the centre of a unit ball holds exactly one quadrant / octant.
+  EXPECT_NEAR(pd::cell_fraction_in_ball(2, {0.5, 0.5, 0}, 1.0, 1.0), pi / 4.0, 1e-12);
+  EXPECT_NEAR(pd::cell_fraction_in_ball(3, {0.5, 0.5, 0.5}, 1.0, 1.0), pi / 6.0, 1e-12);
+  // 1D: the segment [2.5, 3.5] in [−3.2, 3.2] keeps 0.7.
+  EXPECT_NEAR(pd::cell_fraction_in_ball(1, {3.0, 0, 0}, 1.0, 3.2), 0.7, 1e-15);
+  // Wholly inside and wholly outside.
+  EXPECT_DOUBLE_EQ(pd::exact_volume_fraction(3, {1, 1, 0}, 3.0, 1.0), 1.0);
+  EXPECT_DOUBLE_EQ(pd::cell_fraction_in_ball(3, {3, 3, 0}, 1.0, 3.0), 0.0);
+  // Scale invariance: λ = 0.01, δ = 0.01 → same octant.
+  EXPECT_NEAR(pd::cell_fraction_in_ball(3, {0.005, 0.005, 0.005}, 0.01, 0.01), pi / 6.0, 1e-12);
+}
+
+TEST(VolumeCorrection, ExactMatchesMidpointGrid) {
+  // Generic cut cells; a 400² / 160³ midpoint grid is accurate to a few 1e-5.
+  for (const pd::Vec3& c : {pd::Vec3{3, 0, 0}, pd::Vec3{2, 2, 0}, pd::Vec3{3, 1, 0}}) {
+    EXPECT_NEAR(pd::exact_volume_fraction(2, c, 3.015, 1.0), grid_fraction(2, c, 3.015, 400), 5e-5);
+  }
+  for (const pd::Vec3& c : {pd::Vec3{3, 0, 0}, pd::Vec3{2, 2, 1}, pd::Vec3{3, 1, 1}}) {
+    EXPECT_NEAR(pd::exact_volume_fraction(3, c, 2.0 * std::numbers::sqrt3, 1.0),
+                grid_fraction(3, c, 2.0 * std::numbers::sqrt3, 160), 1e-4);
+  }
+}
+
+TEST(VolumeCorrection, ExactCellsTileTheBall) {
+  // Partition of unity: the cells of all lattice offsets tile space, so their fractions add up to
+  // the ball's volume (in cells) exactly.
+  const double R = 3.015;
+  double sum = 0;
+  for (int i = -5; i <= 5; ++i) {
+    for (int j = -5; j <= 5; ++j) {
+      for (int k = -5; k <= 5; ++k) {
+        sum += pd::cell_fraction_in_ball(3, {double(i), double(j), double(k)}, 1.0, R);
+      }
+    }
+  }
+  EXPECT_NEAR(sum, 4.0 * pi * R * R * R / 3.0, 1e-8);
+  double area = 0;
+  for (int i = -5; i <= 5; ++i) {
+    for (int j = -5; j <= 5; ++j) {
+      area += pd::cell_fraction_in_ball(2, {double(i), double(j), 0}, 1.0, R);
+    }
+  }
+  EXPECT_NEAR(area, pi * R * R, 1e-10);
+}
+
+TEST(VolumeCorrection, ExactPerBondOnLatticeAndJitter) {
+  pd::ModelSpec spec = block_spec(3, 3.015, {8, 8, 8});
+  spec.volume_correction = pd::VolumeCorrection::exact;
+  const Built b = build(spec);
+  const auto f = pd::volume_correction_factors(spec, b.particles, b.family);
+  // Every bond's factor is the exact fraction of its own lattice offset.
+  for (std::size_t i = 0; i < b.particles.size(); i += 37) {
+    for (std::size_t k = b.family.offsets[i]; k < b.family.offsets[i + 1]; ++k) {
+      const auto j = b.family.neighbour[k];
+      const pd::Vec3 xi{b.particles.position[j][0] - b.particles.position[i][0],
+                        b.particles.position[j][1] - b.particles.position[i][1],
+                        b.particles.position[j][2] - b.particles.position[i][2]};
+      const pd::Vec3 lat{std::round(xi[0]), std::round(xi[1]), std::round(xi[2])};
+      EXPECT_NEAR(f[k], pd::cell_fraction_in_ball(3, lat, 1.0, 3.015), 1e-12);
+    }
+  }
+  // Jittered particles: computed per bond, still symmetric (point reflection of the geometry).
+  spec.lattice.position_jitter = 0.1;
+  const Built bj = build(spec);
+  const auto fj = pd::volume_correction_factors(spec, bj.particles, bj.family);
+  const auto rev = pd::reverse_bond_index(bj.family);
+  for (std::size_t k = 0; k < fj.size(); ++k) {
+    ASSERT_NEAR(fj[k], fj[rev[k]], 1e-9);
+    ASSERT_GT(fj[k], 0.0);
+    ASSERT_LE(fj[k], 1.0);
+  }
+}
+
+TEST(VolumeCorrection, BulkFamilyVolumeIsTheLatticeSum) {
+  pd::ModelSpec spec = block_spec(3, 3.015, {1, 1, 1});
+  double none = 0, linear = 0, exact = 0;
+  for (int i = -4; i <= 4; ++i) {
+    for (int j = -4; j <= 4; ++j) {
+      for (int k = -4; k <= 4; ++k) {
+        const double r = std::sqrt(double(i * i + j * j + k * k));
+        if ((i || j || k) && r <= 3.015) {
+          none += 1;
+          linear += r > 2.515 ? (3.515 - r) : 1.0;
+          exact += pd::cell_fraction_in_ball(3, {double(i), double(j), double(k)}, 1.0, 3.015);
+        }
+      }
+    }
+  }
+  EXPECT_NEAR(pd::bulk_family_volume(spec), none, 1e-9);
+  spec.volume_correction = pd::VolumeCorrection::linear;
+  EXPECT_NEAR(pd::bulk_family_volume(spec), linear, 1e-9);
+  spec.volume_correction = pd::VolumeCorrection::exact;
+  EXPECT_NEAR(pd::bulk_family_volume(spec), exact, 1e-9);
+}
+
+// ---- surface corrections ----------------------------------------------------------------------
+
+class SurfaceCorrection : public ::testing::TestWithParam<pd::SurfaceCorrection> {};
+
+TEST_P(SurfaceCorrection, SymmetricAndPositive) {
+  for (const auto vc :
+       {pd::VolumeCorrection::none, pd::VolumeCorrection::linear, pd::VolumeCorrection::exact}) {
+    pd::ModelSpec spec = block_spec(3, 2.0, {7, 5, 4});
+    spec.surface_correction = GetParam();
+    spec.volume_correction = vc;
+    const Built b = build(spec);
+    const auto f = pd::bond_correction_factors(spec, b.particles, b.family);
+    const auto rev = pd::reverse_bond_index(b.family);
+    for (std::size_t k = 0; k < f.size(); ++k) {
+      ASSERT_NEAR(f[k], f[rev[k]], 1e-12 * f[k]) << "bond " << k;
+      ASSERT_GT(f[k], 0.0);
+    }
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(AllSurfaceCorrections, SurfaceCorrection,
+                         ::testing::Values(pd::SurfaceCorrection::none,
+                                           pd::SurfaceCorrection::volume,
+                                           pd::SurfaceCorrection::energy,
+                                           pd::SurfaceCorrection::macek_silling));
+
+/// A 3D block whose centre particle and all its neighbours have full horizons (m = 2, 13³ cells:
+/// the centre is 6.5 from every face, farther than 2δ = 4).
+struct BulkCase {
+  pd::ModelSpec spec = block_spec(3, 2.0, {13, 13, 13});
+  Built b = build(spec);
+  std::size_t centre = particle_at(b.particles, {6.5, 6.5, 6.5});
+};
+
+TEST(SurfaceCorrectionBulk, VolumeMethodGivesOne) {
+  BulkCase c;
+  c.spec.surface_correction = pd::SurfaceCorrection::volume;
+  const auto f = pd::bond_correction_factors(c.spec, c.b.particles, c.b.family);
+  for (std::size_t k = c.b.family.offsets[c.centre]; k < c.b.family.offsets[c.centre + 1]; ++k) {
+    EXPECT_NEAR(f[k], 1.0, 1e-12);
+  }
+}
+
+TEST(SurfaceCorrectionBulk, EnergyAndMacekSillingMatchLatticeSums) {
+  // Written-out bulk sums for m = 2, λ = 1: S_x = Σ n_x⁴ |ξ|, S = Σ |ξ| over offsets |ξ| ≤ 2.
+  double sx = 0, s = 0;
+  for (int i = -2; i <= 2; ++i) {
+    for (int j = -2; j <= 2; ++j) {
+      for (int k = -2; k <= 2; ++k) {
+        const double r = std::sqrt(double(i * i + j * j + k * k));
+        if ((i || j || k) && r <= 2.0) {
+          sx += std::pow(i / r, 4) * r;
+          s += r;
+        }
+      }
+    }
+  }
+  // Continuum moments: ∫ n_x⁴ r dV = πδ⁴/5, ∫ r dV = πδ⁴.
+  const double gx = pi * 16.0 / 5.0 / sx, g = pi * 16.0 / s;
+  BulkCase c;
+  c.spec.surface_correction = pd::SurfaceCorrection::energy;
+  auto f = pd::bond_correction_factors(c.spec, c.b.particles, c.b.family);
+  for (std::size_t k = c.b.family.offsets[c.centre]; k < c.b.family.offsets[c.centre + 1]; ++k) {
+    // Equal factors along x, y, z (cubic lattice): the ellipsoid is a sphere, g_ij = g_x.
+    EXPECT_NEAR(f[k], gx, 1e-12);
+  }
+  c.spec.surface_correction = pd::SurfaceCorrection::macek_silling;
+  f = pd::bond_correction_factors(c.spec, c.b.particles, c.b.family);
+  for (std::size_t k = c.b.family.offsets[c.centre]; k < c.b.family.offsets[c.centre + 1]; ++k) {
+    EXPECT_NEAR(f[k], g, 1e-12);
+  }
+}
+
+TEST(SurfaceCorrection1D, EnergyFactorsOfABar) {
+  // 1D bar, λ = 1, δ = 3, 20 particles at 0.5, 1.5, …: classical/PD energy ratio per particle is
+  // δ² / Σ_j |ξ_ij| (moment A δ², V = A). End particle: 9/(1+2+3) = 1.5; second: 9/(1+1+2+3);
+  // bulk: 9/12. A bond takes the mean of its ends.
+  pd::ModelSpec spec = block_spec(1, 3.0, {20, 0, 0});
+  spec.surface_correction = pd::SurfaceCorrection::energy;
+  const Built b = build(spec);
+  const auto f = pd::bond_correction_factors(spec, b.particles, b.family);
+  const std::size_t end = particle_at(b.particles, {0.5, 0, 0});
+  const std::size_t second = particle_at(b.particles, {1.5, 0, 0});
+  for (std::size_t k = b.family.offsets[end]; k < b.family.offsets[end + 1]; ++k) {
+    if (b.family.neighbour[k] == second) {
+      EXPECT_NEAR(f[k], 0.5 * (1.5 + 9.0 / 7.0), 1e-12);
+    }
+  }
+  const std::size_t mid = particle_at(b.particles, {10.5, 0, 0});
+  for (std::size_t k = b.family.offsets[mid]; k < b.family.offsets[mid + 1]; ++k) {
+    EXPECT_NEAR(f[k], 0.75, 1e-12);
+  }
+  // δ = 3.015 with the linear rule makes the 1D bulk sum nearly exact: 2(1 + 2 + 3·0.515) = 9.09
+  // vs δ² = 9.090225, so the bulk factor is 9.090225/9.09 times the linear volume factor.
+  spec.lattice.horizon_factor = 3.015;
+  spec.volume_correction = pd::VolumeCorrection::linear;
+  const Built b2 = build(spec);
+  const auto f2 = pd::bond_correction_factors(spec, b2.particles, b2.family);
+  const std::size_t mid2 = particle_at(b2.particles, {10.5, 0, 0});
+  for (std::size_t k = b2.family.offsets[mid2]; k < b2.family.offsets[mid2 + 1]; ++k) {
+    EXPECT_NEAR(f2[k],
+                9.090225 / 9.09 *
+                    pd::volume_fraction(pd::VolumeCorrection::linear,
+                                        1.0 / b2.family.inverse_length[k], 3.015, 1.0),
+                1e-12);
+  }
+}
+
+TEST(SurfaceCorrection2D, EllipsoidalCombination) {
+  // A particle on the left edge of a 2D plate: its x factor exceeds its y factor. A bond along x
+  // takes the mean x factor, a bond along y the mean y factor, a diagonal bond n = (1, 1)/√2 the
+  // ellipsoidal value (½/g_x² + ½/g_y²)^(−1/2).
+  pd::ModelSpec spec = block_spec(2, 3.0, {12, 12, 0});
+  spec.surface_correction = pd::SurfaceCorrection::energy;
+  const Built b = build(spec);
+  const auto vf = pd::volume_correction_factors(spec, b.particles, b.family);
+  const auto g = pd::energy_surface_factors(spec, b.particles, b.family, vf);
+  const auto f = pd::bond_correction_factors(spec, b.particles, b.family);
+  const std::size_t i = particle_at(b.particles, {0.5, 6.5, 0});
+  EXPECT_GT(g[i][0], g[i][1]);
+  for (std::size_t k = b.family.offsets[i]; k < b.family.offsets[i + 1]; ++k) {
+    const std::size_t j = b.family.neighbour[k];
+    const double dx = b.particles.position[j][0] - 0.5, dy = b.particles.position[j][1] - 6.5;
+    const double gx = 0.5 * (g[i][0] + g[j][0]), gy = 0.5 * (g[i][1] + g[j][1]);
+    if (std::abs(dy) < 1e-9) {
+      EXPECT_NEAR(f[k], gx, 1e-12);
+    } else if (std::abs(dx) < 1e-9) {
+      EXPECT_NEAR(f[k], gy, 1e-12);
+    } else if (std::abs(dx - dy) < 1e-9) {
+      EXPECT_NEAR(f[k], 1.0 / std::sqrt(0.5 / (gx * gx) + 0.5 / (gy * gy)), 1e-12);
+    }
+  }
+  // 2D plane stress: the continuum moment is t·πδ³/4; a bulk particle's factor is that over the
+  // lattice sum Σ n_x⁴ |ξ| λ²t.
+  double sx = 0;
+  for (int p = -3; p <= 3; ++p) {
+    for (int q = -3; q <= 3; ++q) {
+      const double r = std::hypot(p, q);
+      if ((p || q) && r <= 3.0) {
+        sx += std::pow(p / r, 4) * r;
+      }
+    }
+  }
+  const std::size_t centre = particle_at(b.particles, {6.5, 6.5, 0});
+  // The centre of a 12-cell plate is 6 from the edges, its neighbours ≥ 3: full horizons.
+  EXPECT_NEAR(g[centre][0], pi * 27.0 / 4.0 / sx, 1e-12);
+}
+
+TEST(SurfaceCorrection, FoldedIntoTheBondStiffness) {
+  // build_model multiplies c·V_j by the factors; without corrections the field is uniform.
+  pd::ModelSpec spec = block_spec(3, 2.0, {6, 5, 4});
+  const pd::Model plain = pd::build_model(spec);
+  ASSERT_FALSE(plain.field.per_bond());
+  spec.surface_correction = pd::SurfaceCorrection::energy;
+  spec.volume_correction = pd::VolumeCorrection::exact;
+  const pd::Model corrected = pd::build_model(spec);
+  ASSERT_TRUE(corrected.field.per_bond());
+  const auto f = pd::bond_correction_factors(spec, corrected.particles, corrected.family);
+  for (std::size_t k = 0; k < f.size(); ++k) {
+    ASSERT_NEAR(corrected.field.bond_stiffness[k], plain.field.stiffness * f[k],
+                1e-12 * plain.field.stiffness * f[k]);
+  }
+}
+
+// ---- scene keys -------------------------------------------------------------------------------
+
+constexpr const char* minimal = R"(dimension: 1
+lattice:
+  spacing: 0.1
+materials:
+  m:
+    youngs_modulus: 1e9
+    density: 1000
+bodies:
+  - name: bar
+    material: m
+    box: [[0], [1]]
+solver:
+  end_time: 1
+)";
+
+TEST(CorrectionScene, UnknownValuesAreRejectedWithPosition) {
+  const std::string cases[][2] = {{"  surface_correction: bogus\n", "s.yaml:15:23: error: "},
+                                  {"  volume_correction: cubic\n", "s.yaml:15:22: error: "}};
+  for (const auto& c : cases) {
+    try {
+      pd::parse_scene(std::string(minimal) + "model:\n" + c[0], "s.yaml");
+      ADD_FAILURE() << "accepted " << c[0];
+    } catch (const pd::SceneError& e) {
+      EXPECT_EQ(std::string(e.what()).rfind(c[1], 0), 0u) << e.what();
+    }
+  }
+  const pd::Scene s = pd::parse_scene(
+      std::string(minimal) + "model:\n  surface_correction: energy\n  volume_correction: exact\n",
+      "s.yaml");
+  EXPECT_EQ(s.model.surface_correction, pd::SurfaceCorrection::energy);
+  EXPECT_EQ(s.model.volume_correction, pd::VolumeCorrection::exact);
+}
+
+} // namespace
+
+// `moment` weights: over a bulk family, Σ w V |ξ| n_x⁴ and Σ w V |ξ| n_x² n_y² must equal the
+// continuum integrals ∫|ξ| n_x⁴ dV and ∫|ξ| n_x² n_y² dV, computed here independently by a
+// product Gauss–Legendre-free closed form: ∫₀^δ r^(d) dr times the angular means (3D: 1/5 and
+// 1/15 over 4π; 2D: 3/8 and 1/8 over 2π).
+TEST(VolumeCorrection, MomentWeightsReproduceContinuumMoments) {
+  for (int dim : {2, 3}) {
+    for (double m : {3.015, 2.0 * std::sqrt(3.0), 4.0}) {
+      pd::ModelSpec spec;
+      spec.dimension.dim = dim;
+      spec.lattice.spacing = 0.1;
+      spec.lattice.horizon_factor = m;
+      spec.volume_correction = pd::VolumeCorrection::moment;
+      const pd::MomentWeights w = pd::moment_matched_weights(spec);
+      const double lambda = spec.lattice.spacing, delta = m * lambda;
+      const double v = dim == 3 ? lambda * lambda * lambda : lambda * lambda;
+      double s4 = 0, s22 = 0, wmin = 1e9, wmax = -1e9;
+      const int r = static_cast<int>(std::ceil(m));
+      for (int k = (dim == 3 ? -r : 0); k <= (dim == 3 ? r : 0); ++k) {
+        for (int j = -r; j <= r; ++j) {
+          for (int i = -r; i <= r; ++i) {
+            const double len = lambda * std::sqrt(double(i * i + j * j + k * k));
+            if (len == 0 || len > delta * (1 + 1e-9)) {
+              continue;
+            }
+            const pd::Vec3 xi{i * lambda, j * lambda, k * lambda};
+            const double weight = w.weight(xi);
+            wmin = std::min(wmin, weight);
+            wmax = std::max(wmax, weight);
+            const double nx = xi[0] / len, ny = xi[1] / len;
+            s4 += weight * v * len * std::pow(nx, 4);
+            s22 += weight * v * len * nx * nx * ny * ny;
+          }
+        }
+      }
+      const double pi = std::numbers::pi;
+      const double c4 =
+          dim == 3 ? std::pow(delta, 4) / 4 * 4 * pi / 5 : std::pow(delta, 3) / 3 * 2 * pi * 3 / 8;
+      const double c22 =
+          dim == 3 ? std::pow(delta, 4) / 4 * 4 * pi / 15 : std::pow(delta, 3) / 3 * 2 * pi / 8;
+      EXPECT_NEAR(s4 / c4, 1.0, 1e-12) << "dim " << dim << " m " << m;
+      EXPECT_NEAR(s22 / c22, 1.0, 1e-12) << "dim " << dim << " m " << m;
+      EXPECT_GT(wmin, 0.5) << "weights must stay positive and moderate";
+      EXPECT_LT(wmax, 1.5);
+    }
+  }
+}
