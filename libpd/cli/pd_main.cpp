@@ -4,12 +4,15 @@
 //   pd info SCENE [--json]                    sizes, memory estimate, stable time step
 //   pd bench SCENE [--steps N] [--threads N]  force-evaluation throughput
 //   pd verify [CASE...] [-o DIR] [--list]     verification cases with their gates
+//   pd stability SCENE... [--integrator X]    measured vs predicted stable time steps
+//   pd compare dynamic|quasistatic [-o F]     integrator cost/accuracy rows (JSON lines)
 //
 // Exit codes: 0 success, 1 bad input or usage, 2 a verification gate failed, 3 the run became
 // unstable.
 #include "libpd/force_kernel.hpp"
 #include "libpd/run.hpp"
 #include "libpd/scene.hpp"
+#include "libpd/stability.hpp"
 #include "libpd/stable_time_step.hpp"
 #include "verification.hpp"
 
@@ -19,7 +22,10 @@
 #include <cmath>
 #include <cstdio>
 #include <fmt/format.h>
+#include <fstream>
 #include <iostream>
+#include <numbers>
+#include <optional>
 #include <unistd.h>
 
 #ifdef _OPENMP
@@ -220,6 +226,329 @@ int cmd_verify(const std::vector<std::string>& names, const std::string& out_dir
   return failed > 0 ? 2 : 0;
 }
 
+// ---- pd stability ----------------------------------------------------------------------------
+
+std::optional<pd::StabilityTarget> parse_target(const std::string& word) {
+  pd::StabilityTarget t;
+  if (word == "verlet") {
+    t.kind = pd::IntegratorKind::verlet;
+    return t;
+  }
+  if (word == "euler-cromer" || word == "damped-euler") {
+    t.kind = word == "euler-cromer" ? pd::IntegratorKind::euler_cromer
+                                    : pd::IntegratorKind::damped_euler;
+    return t;
+  }
+  const std::string name = word.starts_with("arkode:") ? word.substr(7) : word;
+  for (int i = 0; i < pd::arkode_table_count; ++i) {
+    if (pd::to_string(static_cast<pd::ArkodeTable>(i)) == name) {
+      t.kind = pd::IntegratorKind::arkode;
+      t.table = static_cast<pd::ArkodeTable>(i);
+      return t;
+    }
+  }
+  return std::nullopt;
+}
+
+int cmd_stability(const std::vector<std::string>& scenes, std::vector<std::string> integrators,
+                  std::size_t steps, double tolerance, bool json, int threads) {
+  set_threads(threads);
+  if (integrators.empty()) {
+    integrators.push_back("verlet");
+    if (pd::arkode_available()) {
+      for (int i = 0; i < pd::arkode_table_count; ++i) {
+        integrators.push_back("arkode:" + pd::to_string(static_cast<pd::ArkodeTable>(i)));
+      }
+    }
+  }
+  std::vector<pd::StabilityTarget> targets;
+  for (const auto& w : integrators) {
+    auto t = parse_target(w);
+    if (!t) {
+      fmt::print(stderr,
+                 "error: unknown integrator '{}' (verlet, euler-cromer, damped-euler or "
+                 "arkode:TABLE)\n",
+                 w);
+      return 1;
+    }
+    if (t->kind == pd::IntegratorKind::arkode && !pd::arkode_available()) {
+      fmt::print(stderr, "error: '{}' needs SUNDIALS, which this build lacks\n", w);
+      return 1;
+    }
+    targets.push_back(*t);
+  }
+  pd::StabilityOptions opt;
+  opt.steps = steps;
+  opt.relative_tolerance = tolerance;
+  pd::Json rows = pd::Json::array();
+  if (!json) {
+    fmt::print("{:<16} {:<24} {:>6} {:>10} {:>10} {:>10} {:>7} {:>7} {:>10} {:>7} {:>4} {:>6}\n",
+               "case", "integrator", "beta", "measured", "eq31", "sharp", "m/sharp", "m/eq31",
+               "sharp_N", "m/shN", "runs", "wall");
+  }
+  for (const auto& path : scenes) {
+    const pd::Scene scene = load_or_explain(path);
+    const pd::Model model = pd::build_model(pd::stability_scene(scene).model);
+    const pd::FrequencyEstimate freq = pd::max_frequency(model);
+    const std::string name = std::filesystem::path(path).stem().string();
+    for (const auto& t : targets) {
+      const pd::StabilityResult r = pd::measure_stability(scene, t, opt, freq.omega_max);
+      pd::Json j;
+      j["case"] = name;
+      j["scene"] = path;
+      j["integrator"] = r.integrator;
+      j["interval"] = r.interval;
+      j["omega_max"] = r.omega_max;
+      j["lanczos_iterations"] = freq.iterations;
+      j["measured_dt"] = r.measured;
+      j["unstable_dt"] = r.unstable;
+      j["eq31_dt"] = r.eq31;
+      j["sharp_dt"] = r.sharp;
+      j["interval_finite_horizon"] = r.interval_finite;
+      j["sharp_finite_horizon_dt"] = r.sharp_finite;
+      j["measured_over_sharp"] = r.sharp > 0 ? r.measured / r.sharp : 0.0;
+      j["measured_over_sharp_finite_horizon"] = r.measured / r.sharp_finite;
+      j["measured_over_eq31"] = r.measured / r.eq31;
+      j["steps_per_run"] = opt.steps;
+      j["runs"] = r.runs;
+      j["wall_seconds"] = r.seconds;
+      if (json) {
+        rows.push_back(j);
+      } else {
+        fmt::print("{:<16} {:<24} {:>6.4f} {:>10.4e} {:>10.4e} {:>10.4e} {:>7.4f} {:>7.4f} "
+                   "{:>10.4e} {:>7.4f} {:>4} {:>5.0f}s\n",
+                   name, r.integrator, r.interval, r.measured, r.eq31, r.sharp,
+                   r.sharp > 0 ? r.measured / r.sharp : 0.0, r.measured / r.eq31, r.sharp_finite,
+                   r.measured / r.sharp_finite, r.runs, r.seconds);
+        std::fflush(stdout);
+      }
+    }
+  }
+  if (json) {
+    fmt::print("{}\n", rows.dump());
+  }
+  return 0;
+}
+
+// ---- pd compare ------------------------------------------------------------------------------
+
+/// Modal series of the released bar, u(x, t) = Σ a_n sin(k_n x) cos(c k_n t) — the formula of
+/// verification/cases/bar_vibration.cpp (k_n = (2n − 1)π/(2L), a_n = 2ε(−1)^(n+1)/(L k_n²)).
+double bar_modal_series(double x, double t, double strain, double length, double wave_speed) {
+  double u = 0;
+  for (int n = 1; n <= 4000; ++n) {
+    const double k = (2.0 * n - 1.0) * std::numbers::pi / (2.0 * length);
+    const double a = 2.0 * strain * ((n % 2) ? 1.0 : -1.0) / (length * k * k);
+    u += a * std::sin(k * x) * std::cos(wave_speed * k * t);
+  }
+  return u;
+}
+
+struct CompareConfig {
+  pd::IntegratorKind kind;
+  pd::ArkodeTable table = pd::ArkodeTable::rk4;
+  bool adaptive = false;
+  double dt_factor = 0; ///< × eq. 31 × stability scale; 0: the scene's dt
+  double rtol = 1e-6;
+};
+
+std::string config_table(const CompareConfig& c) {
+  return c.kind == pd::IntegratorKind::arkode ? pd::to_string(c.table) : std::string("-");
+}
+
+pd::Scene configured(const pd::Scene& base, const CompareConfig& c, double eq31) {
+  pd::Scene s = base;
+  s.solver.integrator = c.kind;
+  s.solver.arkode.table = c.table;
+  s.solver.arkode.adaptive = c.adaptive;
+  s.solver.arkode.rtol = c.rtol;
+  s.output.vtu = false;
+  if (c.dt_factor > 0) {
+    double scale = 1.0;
+    if (c.kind == pd::IntegratorKind::arkode) {
+      const double beta = pd::imaginary_stability_interval(pd::butcher_tableau(c.table));
+      scale = beta > 0 ? 0.5 * beta : 0.5;
+    }
+    s.solver.dt = c.dt_factor * eq31 * scale;
+  }
+  if (c.kind == pd::IntegratorKind::euler_cromer || c.kind == pd::IntegratorKind::verlet) {
+    s.solver.damping = 0; // undamped schemes; ADR ignores c_v, arkode uses it
+    s.model.effects.damping = false;
+  }
+  return s;
+}
+
+int cmd_compare(const std::string& which, const std::string& out_file,
+                const std::string& scenes_dir, bool quick, int threads) {
+  set_threads(threads);
+  const std::filesystem::path dir = scenes_dir.empty() ? pd::verification::default_scenes_dir()
+                                                       : std::filesystem::path(scenes_dir);
+  std::ofstream out;
+  if (!out_file.empty()) {
+    out.open(out_file);
+    if (!out) {
+      fmt::print(stderr, "error: cannot write {}\n", out_file);
+      return 1;
+    }
+  }
+  auto emit = [&](const pd::Json& row) {
+    std::string line = row.dump(0);
+    while (!line.empty() && line.back() == '\n') {
+      line.pop_back(); // one row per line
+    }
+    fmt::print("{}\n", line);
+    std::fflush(stdout);
+    if (out) {
+      out << line << "\n";
+      out.flush();
+    }
+  };
+  std::vector<pd::ArkodeTable> tables;
+  if (pd::arkode_available()) {
+    for (int i = 0; i < pd::arkode_table_count; ++i) {
+      tables.push_back(static_cast<pd::ArkodeTable>(i));
+    }
+  }
+
+  if (which == "dynamic") {
+    const pd::Scene base = pd::load_scene((dir / "bar-vibration.yaml").string());
+    const pd::Model probe_model = pd::build_model(base.model);
+    const double eq31 = pd::stable_time_step(probe_model);
+    const pd::Material& steel = base.model.materials.front();
+    const double wave_speed = std::sqrt(steel.youngs_modulus / steel.density);
+    const double strain = base.initial.displacement_gradient[0][0];
+    const double length = 1.0;
+    const double x_probe = base.probes.front().point[0];
+    const double sample = 10 * base.solver.dt.value_or(eq31); // the case's sampling interval
+    auto run = [&](const CompareConfig& c) {
+      pd::Scene s = configured(base, c, eq31);
+      const double dt = s.solver.dt.value_or(eq31);
+      s.output.history_every = std::max<std::size_t>(1, static_cast<std::size_t>(sample / dt));
+      pd::RunOptions opt;
+      return std::pair{s, pd::run_scene(s, opt)};
+    };
+    // Reference PD solution (temporal error only): Dormand–Prince at 1/20 of its stable step.
+    std::vector<double> ref_t, ref_u;
+    if (!tables.empty()) {
+      CompareConfig rc{pd::IntegratorKind::arkode, pd::ArkodeTable::dormand_prince, false,
+                       quick ? 0.2 : 0.05};
+      pd::Scene s = configured(base, rc, eq31);
+      s.output.history_every = 1;
+      const pd::RunOutcome ro = pd::run_scene(s, pd::RunOptions{});
+      for (std::size_t r = 0; r < ro.history.time.size(); ++r) {
+        ref_t.push_back(ro.history.time[r]);
+        ref_u.push_back(ro.history.values[r][0]);
+      }
+    }
+    auto reference_at = [&](double t) {
+      const auto it = std::lower_bound(ref_t.begin(), ref_t.end(), t);
+      if (it == ref_t.begin()) {
+        return ref_u.front();
+      }
+      if (it == ref_t.end()) {
+        return ref_u.back();
+      }
+      const std::size_t k = static_cast<std::size_t>(it - ref_t.begin());
+      const double w = (t - ref_t[k - 1]) / (ref_t[k] - ref_t[k - 1]);
+      return (1 - w) * ref_u[k - 1] + w * ref_u[k];
+    };
+    std::vector<CompareConfig> configs;
+    const std::vector<double> factors =
+        quick ? std::vector<double>{0.9, 0.45} : std::vector<double>{0.9, 0.45, 0.225, 0.1125};
+    for (double f : factors) {
+      configs.push_back({pd::IntegratorKind::verlet, pd::ArkodeTable::rk4, false, f});
+    }
+    for (auto t : tables) {
+      if (t == pd::ArkodeTable::heun_euler) {
+        continue; // no imaginary-axis stability interval: undamped runs grow for any Δt
+      }
+      for (double f : factors) {
+        configs.push_back({pd::IntegratorKind::arkode, t, false, f});
+      }
+    }
+    for (const auto& c : configs) {
+      const auto [s, ro] = run(c);
+      double rms = 0, rms_ref = 0;
+      const std::size_t n = ro.history.time.size();
+      for (std::size_t r = 0; r < n; ++r) {
+        const double t = ro.history.time[r];
+        const double u = ro.history.values[r][0];
+        const double e = u - bar_modal_series(x_probe, t, strain, length, wave_speed);
+        rms += e * e;
+        if (!ref_t.empty()) {
+          const double er = u - reference_at(t);
+          rms_ref += er * er;
+        }
+      }
+      const double norm = strain * length;
+      pd::Json j;
+      j["case"] = "bar-vibration";
+      j["integrator"] = pd::to_string(c.kind);
+      j["table"] = config_table(c);
+      j["dt"] = ro.result.dt;
+      j["dt_over_eq31"] = ro.result.dt / eq31;
+      j["error"] = std::sqrt(rms / static_cast<double>(std::max<std::size_t>(n, 1))) / norm;
+      j["error_vs_reference_pd"] =
+          ref_t.empty()
+              ? 0.0
+              : std::sqrt(rms_ref / static_cast<double>(std::max<std::size_t>(n, 1))) / norm;
+      j["error_measure"] = "free-end history RMS / (eps L)";
+      j["force_evaluations"] = ro.result.force_evaluations;
+      j["wall_seconds"] = ro.result.wall_seconds;
+      j["steps"] = ro.result.steps;
+      j["status"] = pd::to_string(ro.result.status);
+      emit(j);
+    }
+    return 0;
+  }
+  if (which == "quasistatic") {
+    const pd::Scene base = pd::load_scene((dir / "clamped-beam.yaml").string());
+    std::vector<CompareConfig> configs = {
+        {pd::IntegratorKind::damped_euler},
+        {pd::IntegratorKind::adr},
+    };
+    for (auto t : {pd::ArkodeTable::rk4, pd::ArkodeTable::bogacki_shampine}) {
+      if (pd::arkode_available()) {
+        configs.push_back({pd::IntegratorKind::arkode, t});
+      }
+    }
+    if (pd::arkode_available()) {
+      configs.push_back(
+          {pd::IntegratorKind::arkode, pd::ArkodeTable::dormand_prince, true, 0, 1e-6});
+    }
+    double reference = 0;
+    for (const auto& c : configs) {
+      const pd::Scene s = configured(base, c, 0);
+      const pd::RunOutcome ro = pd::run_scene(s, pd::RunOptions{});
+      const double w =
+          ro.probes.count("midspan_deflection") ? ro.probes.at("midspan_deflection") : 0.0;
+      if (c.kind == pd::IntegratorKind::damped_euler) {
+        reference = w;
+      }
+      pd::Json j;
+      j["case"] = "clamped-beam";
+      j["integrator"] = pd::to_string(c.kind);
+      j["table"] = config_table(c);
+      j["adaptive"] = c.adaptive;
+      j["dt"] = ro.result.dt;
+      j["midspan_deflection"] = w;
+      j["error"] = reference != 0 ? std::abs(w - reference) / std::abs(reference) : 0.0;
+      j["error_measure"] = "|w - w(damped-euler)| / |w(damped-euler)|";
+      j["force_tolerance"] = s.solver.steady.force_tolerance;
+      j["residual"] = ro.result.residual;
+      j["force_evaluations"] = ro.result.force_evaluations;
+      j["wall_seconds"] = ro.result.wall_seconds;
+      j["steps"] = ro.result.steps;
+      j["internal_steps"] = ro.result.internal_steps;
+      j["status"] = pd::to_string(ro.result.status);
+      emit(j);
+    }
+    return 0;
+  }
+  fmt::print(stderr, "error: pd compare needs 'dynamic' or 'quasistatic'\n");
+  return 1;
+}
+
 } // namespace
 
 int main(int argc, char** argv) {
@@ -266,6 +595,36 @@ int main(int argc, char** argv) {
   verify->add_option("--scenes", scenes_dir, "folder with the shipped scenes");
   verify->add_option("--threads", threads, "OpenMP threads (default: all)");
 
+  std::vector<std::string> stability_scenes, stability_integrators;
+  std::size_t stability_steps = 1000;
+  double stability_tolerance = 0.01;
+  auto* stability = app.add_subcommand(
+      "stability", "Largest stable fixed time step, measured by bisection, beside eq. 31 and the "
+                   "sharp prediction from the largest frequency of the linearised operator");
+  stability->add_option("scenes", stability_scenes, "scene files (YAML)")->required();
+  stability->add_option("--integrator", stability_integrators,
+                        "verlet, euler-cromer, damped-euler or arkode:TABLE (repeatable; default: "
+                        "verlet and every offered table)");
+  stability->add_option("--steps", stability_steps, "steps of each bounded run")
+      ->capture_default_str();
+  stability->add_option("--tolerance", stability_tolerance, "relative bisection tolerance")
+      ->capture_default_str();
+  stability->add_flag("--json", json, "machine-readable output");
+  stability->add_option("--threads", threads, "OpenMP threads (default: all)");
+
+  std::string compare_what, compare_out;
+  bool compare_quick = false;
+  auto* compare = app.add_subcommand(
+      "compare", "Integrator comparison rows (JSON lines): 'dynamic' = bar-vibration error vs "
+                 "cost, 'quasistatic' = clamped-beam cost to steady state");
+  compare->add_option("what", compare_what, "dynamic | quasistatic")
+      ->required()
+      ->check(CLI::IsMember({"dynamic", "quasistatic"}));
+  compare->add_option("-o,--output", compare_out, "also write the rows to this .jsonl file");
+  compare->add_option("--scenes", scenes_dir, "folder with the shipped scenes");
+  compare->add_flag("--quick", compare_quick, "fewer time steps and a coarser reference");
+  compare->add_option("--threads", threads, "OpenMP threads (default: all)");
+
   CLI11_PARSE(app, argc, argv);
   try {
     if (*run) {
@@ -287,6 +646,13 @@ int main(int argc, char** argv) {
     }
     if (*verify) {
       return cmd_verify(cases, verify_out, list, scenes_dir, threads);
+    }
+    if (*stability) {
+      return cmd_stability(stability_scenes, stability_integrators, stability_steps,
+                           stability_tolerance, json, threads);
+    }
+    if (*compare) {
+      return cmd_compare(compare_what, compare_out, scenes_dir, compare_quick, threads);
     }
   } catch (const pd::SceneError& e) {
     fmt::print(stderr, "{}\n", e.what());

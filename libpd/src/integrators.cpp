@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <limits>
+#include <stdexcept>
 
 namespace pd {
 
@@ -13,8 +14,47 @@ std::string to_string(IntegratorKind kind) {
     return "euler-cromer";
   case IntegratorKind::verlet:
     return "verlet";
+  case IntegratorKind::adr:
+    return "adr";
+  case IntegratorKind::arkode:
+    return "arkode";
   }
   return "?";
+}
+
+std::string to_string(ArkodeTable table) {
+  switch (table) {
+  case ArkodeTable::heun_euler:
+    return "heun-euler";
+  case ArkodeTable::bogacki_shampine:
+    return "bogacki-shampine";
+  case ArkodeTable::knoth_wolke:
+    return "knoth-wolke";
+  case ArkodeTable::rk4:
+    return "rk4";
+  case ArkodeTable::zonneveld:
+    return "zonneveld";
+  case ArkodeTable::cash_karp:
+    return "cash-karp";
+  case ArkodeTable::fehlberg:
+    return "fehlberg";
+  case ArkodeTable::dormand_prince:
+    return "dormand-prince";
+  }
+  return "?";
+}
+
+bool ButcherTableau::hit_by_issue_311() const {
+  if (stages < 1 || std::abs(c[static_cast<std::size_t>(stages - 1)] - 1.0) > 1e-12) {
+    return false;
+  }
+  const auto s = static_cast<std::size_t>(stages);
+  for (std::size_t j = 0; j < s; ++j) {
+    if (std::abs(a[(s - 1) * s + j] - b[j]) > 1e-14) {
+      return true; // c_s = 1 but not first-same-as-last
+    }
+  }
+  return false;
 }
 
 void apply_constraints(const Model& model, const LoadRamp& ramp, double t, double* position,
@@ -30,9 +70,6 @@ void apply_constraints(const Model& model, const LoadRamp& ramp, double t, doubl
   }
 }
 
-namespace {
-
-/// Largest |u|² over particles (may be +inf), NaN as soon as any coordinate is not finite.
 StepReport displacement_report(const Model& m, const double* y) {
   const auto n = static_cast<std::ptrdiff_t>(m.size());
   double worst = 0;
@@ -54,6 +91,8 @@ StepReport displacement_report(const Model& m, const double* y) {
   return r;
 }
 
+namespace {
+
 /// Miranda §3.2, steps (2)–(19): forces at the current positions, then
 /// v ← ψ [v + Δt (b + F b_ext)/ρ], y ← y + Δt v. With c_v = 0 this is Euler–Cromer.
 class DampedEuler final : public Integrator {
@@ -63,6 +102,7 @@ public:
         name_(s.kind == IntegratorKind::euler_cromer ? "euler-cromer" : "damped-euler") {}
 
   StepReport step(State& st, double dt) override {
+    ++calls_;
     forces_.compute(st.position.data(), st.force.data());
     ++force_evaluations_;
     const double t_new = st.time + dt;
@@ -111,6 +151,7 @@ public:
       : model_(m), forces_(f), ramp_(s.ramp) {}
 
   StepReport step(State& st, double dt) override {
+    ++calls_;
     if (!primed_) {
       forces_.compute(st.position.data(), st.force.data());
       ++force_evaluations_;
@@ -177,6 +218,10 @@ std::unique_ptr<Integrator> make_integrator(const IntegratorSettings& s, Model& 
   }
   case IntegratorKind::verlet:
     return std::make_unique<VelocityVerlet>(model, forces, s);
+  case IntegratorKind::adr:
+    return make_adr_integrator(s, model, forces);
+  case IntegratorKind::arkode:
+    return make_arkode_integrator(s, model, forces);
   }
   throw std::logic_error("unknown integrator");
 }

@@ -143,11 +143,38 @@ constexpr Key steady_keys[] = {
 };
 constexpr Section steady_section{"under 'solver.steady'", steady_keys};
 
+constexpr Key arkode_keys[] = {
+    {.name = "table",
+     .type = Type::choice,
+     .doc = "Butcher table of ERKStep (SUNDIALS 6.4.1): those that compute correctly with it; "
+            "heun-euler and rk4 run with the issue-311 work-around",
+     .choices = "heun-euler|bogacki-shampine|knoth-wolke|rk4|zonneveld|cash-karp|fehlberg|"
+                "dormand-prince",
+     .fallback = "rk4"},
+    {.name = "adaptive",
+     .type = Type::boolean,
+     .doc = "false: fixed steps of solver.dt; true: error-controlled steps within each solver.dt "
+            "(tables with an embedding only)",
+     .fallback = "false"},
+    {.name = "rtol",
+     .type = Type::number,
+     .doc = "relative tolerance of the adaptive error test",
+     .range = positive,
+     .fallback = "1e-6"},
+    {.name = "atol",
+     .type = Type::number,
+     .doc = "absolute tolerance of the adaptive error test, on u [m] and v [m/s]",
+     .range = positive,
+     .fallback = "1e-12"},
+};
+constexpr Section arkode_section{"under 'solver.arkode'", arkode_keys};
+
 constexpr Key solver_keys[] = {
     {.name = "integrator",
      .type = Type::choice,
-     .doc = "time integrator; only damped-euler applies kinematic damping",
-     .choices = "damped-euler|euler-cromer|verlet",
+     .doc = "time integrator; damped-euler and arkode apply kinematic damping, adr computes its "
+            "own",
+     .choices = "damped-euler|euler-cromer|verlet|adr|arkode",
      .fallback = "damped-euler"},
     {.name = "dt",
      .type = Type::number_or_auto,
@@ -196,6 +223,11 @@ constexpr Key solver_keys[] = {
      .doc = "steady-state stop; its presence (even empty) enables it",
      .show = Show::commented,
      .section = &steady_section},
+    {.name = "arkode",
+     .type = Type::section,
+     .doc = "options of the arkode integrator (SUNDIALS ARKode ERKStep)",
+     .show = Show::commented,
+     .section = &arkode_section},
 };
 constexpr Section solver_section{"under 'solver'", solver_keys};
 
@@ -586,10 +618,10 @@ constexpr Key root_keys[] = {
 };
 constexpr Section root_section{"at the top level", root_keys};
 
-constexpr std::array<const Section*, 12> all_sections{
-    &root_section,    &lattice_section, &material_section, &body_section,
-    &support_section, &load_section,    &model_section,    &solver_section,
-    &steady_section,  &initial_section, &probe_section,    &output_section};
+constexpr std::array<const Section*, 13> all_sections{
+    &root_section,    &lattice_section, &material_section, &body_section,   &support_section,
+    &load_section,    &model_section,   &solver_section,   &steady_section, &arkode_section,
+    &initial_section, &probe_section,   &output_section};
 
 // ---------------------------------------------------------------------------------------------
 // Text helpers
@@ -1753,6 +1785,21 @@ Scene read_scene(const YAML::Node& root, Reader& r) {
       solver.steady.check_every = *n;
     }
   }
+  if (sol.has("arkode")) {
+    const Fields ak = r.section(sol, "arkode");
+    if (auto t = r.choice(ak, "table")) {
+      solver.arkode.table = static_cast<ArkodeTable>(*t);
+    }
+    if (auto a = r.boolean(ak, "adaptive")) {
+      solver.arkode.adaptive = *a;
+    }
+    if (auto x = r.number(ak, "rtol")) {
+      solver.arkode.rtol = *x;
+    }
+    if (auto x = r.number(ak, "atol")) {
+      solver.arkode.atol = *x;
+    }
+  }
 
   // Initial state.
   const Fields ini = r.section(top, "initial");
@@ -1865,11 +1912,45 @@ Scene read_scene(const YAML::Node& root, Reader& r) {
     r.fail(damping_effect, "effect 'damping' is listed but 'solver.damping' is 0",
            "set 'damping: c_v' [kg/(m³ s)] > 0 under 'solver', or remove 'damping' from effects");
   }
-  if (solver.integrator != IntegratorKind::damped_euler && solver.damping > 0) {
+  if ((solver.integrator == IntegratorKind::euler_cromer ||
+       solver.integrator == IntegratorKind::verlet) &&
+      solver.damping > 0) {
     r.fail(sol.find("integrator")->at(),
            fmt::format("integrator '{}' has no damping, but 'solver.damping' is {}",
                        sol.find("integrator")->value.Scalar(), format_number(solver.damping)),
-           "use 'integrator: damped-euler', or set 'damping: 0' and remove the 'damping' effect");
+           "use 'integrator: damped-euler' or 'arkode', or set 'damping: 0' and remove the "
+           "'damping' effect");
+  }
+  if (solver.integrator == IntegratorKind::adr && solver.damping > 0) {
+    r.warn(sol.find("damping")->at(),
+           "'solver.damping' is ignored by the adr integrator: adaptive dynamic relaxation "
+           "computes its damping every step (Kilic & Madenci 2010)");
+  }
+  if (solver.integrator == IntegratorKind::arkode) {
+    const YAML::Node at = sol.find("integrator")->at();
+    if (!arkode_available()) {
+      r.fail(at, "integrator 'arkode' is not available: libpd was built without SUNDIALS",
+             "rebuild with -DLIBPD_WITH_SUNDIALS=ON (needs libsundials-dev 6), or choose "
+             "another integrator");
+    }
+    if (model.effects.damage || model.effects.plasticity) {
+      r.fail(at,
+             fmt::format("integrator 'arkode' cannot run the '{}' effect: its trial stage "
+                         "evaluations would update bond history",
+                         model.effects.damage ? "damage" : "plasticity"),
+             "use damped-euler, verlet or adr for damage and plasticity");
+    }
+    if (solver.arkode.adaptive && (solver.arkode.table == ArkodeTable::knoth_wolke ||
+                                   solver.arkode.table == ArkodeTable::rk4)) {
+      const Fields ak = r.section(sol, "arkode");
+      r.fail(ak.find("adaptive")->at(),
+             fmt::format("table '{}' has no embedded method, so it cannot adapt its steps",
+                         to_string(solver.arkode.table)),
+             "use 'adaptive: false', or a table with an embedding (heun-euler, bogacki-shampine, "
+             "zonneveld, cash-karp, fehlberg, dormand-prince)");
+    }
+  } else if (sol.has("arkode")) {
+    r.warn(sol.find("arkode")->name, "'solver.arkode' is ignored: the integrator is not 'arkode'");
   }
   if (!solver.end_time && !solver.steady.enabled) {
     r.fail(sol.anchor,

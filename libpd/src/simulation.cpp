@@ -49,8 +49,20 @@ Simulation::Simulation(Model& model, const SolverSpec& solver, const InitialSpec
   ramp_.ramp_time = solver.ramp_time;
   apply_constraints(model, ramp_, 0.0, state_.position.data(), state_.velocity.data());
 
+  forces_ = make_force_evaluator(model);
   dt_stable_ = stable_time_step(model);
-  dt_ = solver.dt ? *solver.dt : solver.safety * dt_stable_;
+  IntegratorSettings is;
+  is.kind = solver.integrator;
+  is.damping = solver.damping;
+  is.ramp = ramp_;
+  is.arkode = solver.arkode;
+  is.cfl_fraction = solver.safety;
+  if (solver.integrator == IntegratorKind::arkode) {
+    // Adaptive ARKode: ERKStepSetStabilityFn gets the eq. 31 step scaled by the table's β/2.
+    is.stable_dt = dt_stable_ * make_integrator(is, model, *forces_)->stability_scale();
+  }
+  integrator_ = make_integrator(is, model, *forces_);
+  dt_ = solver.dt ? *solver.dt : solver.safety * dt_stable_ * integrator_->stability_scale();
   if (!(dt_ > 0) || !std::isfinite(dt_)) {
     throw std::runtime_error(
         fmt::format("no usable time step: dt = {} (eq. 31 limit {}); does the model have bonds?",
@@ -63,13 +75,13 @@ Simulation::Simulation(Model& model, const SolverSpec& solver, const InitialSpec
                             ? solver.blowup_displacement
                             : std::max(diagonal, model.spec.lattice.spacing);
   blowup_squared_ = blowup * blowup;
+}
 
-  forces_ = make_force_evaluator(model);
-  IntegratorSettings is;
-  is.kind = solver.integrator;
-  is.damping = solver.damping;
-  is.ramp = ramp_;
-  integrator_ = make_integrator(is, model, *forces_);
+void Simulation::perturb(const std::vector<double>& du) {
+  for (std::size_t d = 0; d < state_.position.size() && d < du.size(); ++d) {
+    state_.position[d] += du[d];
+  }
+  apply_constraints(model_, ramp_, state_.time, state_.position.data(), state_.velocity.data());
 }
 
 double Simulation::kinetic_energy() const {
@@ -164,6 +176,7 @@ RunResult Simulation::run(const Observer& observer) {
     }
   }
   r.steps = state_.step;
+  r.internal_steps = integrator_->internal_steps();
   r.time = state_.time;
   r.force_evaluations = integrator_->force_evaluations();
   if (r.status != RunStatus::unstable) {

@@ -1050,4 +1050,86 @@ TEST(SceneParser, ShippedScenesLoad) {
 }
 #endif
 
+// ---- Integrators: adr and arkode ----------------------------------------------------------------
+
+TEST(SceneParser, ArkodeSectionParses) {
+  if (!pd::arkode_available()) {
+    GTEST_SKIP() << "built without SUNDIALS";
+  }
+  const pd::Scene s = pd::parse_scene(yaml(minimal) + R"(  integrator: arkode
+  arkode:
+    table: dormand-prince
+    adaptive: true
+    rtol: 1e-5
+    atol: 1e-11
+)",
+                                      "s.yaml");
+  EXPECT_EQ(s.solver.integrator, pd::IntegratorKind::arkode);
+  EXPECT_EQ(s.solver.arkode.table, pd::ArkodeTable::dormand_prince);
+  EXPECT_TRUE(s.solver.arkode.adaptive);
+  EXPECT_EQ(s.solver.arkode.rtol, 1e-5);
+  EXPECT_EQ(s.solver.arkode.atol, 1e-11);
+  EXPECT_TRUE(s.warnings.empty());
+  // Defaults are the struct's.
+  const pd::Scene d =
+      pd::parse_scene(yaml(minimal) + "  integrator: arkode\n  arkode:\n", "s.yaml");
+  EXPECT_EQ(d.solver.arkode.table, pd::ArkodeSpec{}.table);
+  EXPECT_EQ(d.solver.arkode.adaptive, pd::ArkodeSpec{}.adaptive);
+  EXPECT_EQ(d.solver.arkode.rtol, pd::ArkodeSpec{}.rtol);
+  EXPECT_EQ(d.solver.arkode.atol, pd::ArkodeSpec{}.atol);
+}
+
+TEST(SceneParser, ArkodeUnknownTable) {
+  EXPECT_TRUE(fails_at(yaml(minimal) + "  integrator: arkode\n  arkode:\n    table: rk5\n", 16, 12,
+                       "unknown value 'rk5'"));
+}
+
+TEST(SceneParser, ArkodeAdaptiveNeedsEmbedding) {
+  if (!pd::arkode_available()) {
+    GTEST_SKIP() << "built without SUNDIALS";
+  }
+  EXPECT_TRUE(fails_at(yaml(minimal) + "  integrator: arkode\n  arkode:\n    table: rk4\n"
+                                       "    adaptive: true\n",
+                       17, 15, "has no embedded method"));
+}
+
+TEST(SceneParser, ArkodeRejectsBondHistory) {
+  if (!pd::arkode_available()) {
+    GTEST_SKIP() << "built without SUNDIALS";
+  }
+  std::string s = yaml(minimal);
+  s.replace(s.find("    density: 1000"), 17, "    density: 1000\n    critical_stretch: 0.01");
+  EXPECT_TRUE(fails_at(s + "  integrator: arkode\neffects: [damage]\n", 15, 15,
+                       "cannot run the 'damage' effect"));
+}
+
+TEST(SceneParser, ArkodeAcceptsDamping) {
+  if (!pd::arkode_available()) {
+    GTEST_SKIP() << "built without SUNDIALS";
+  }
+  const pd::Scene s = pd::parse_scene(
+      yaml(minimal) + "  integrator: arkode\n  damping: 100\neffects: [damping]\n", "s.yaml");
+  EXPECT_EQ(s.solver.damping, 100);
+  EXPECT_TRUE(s.warnings.empty());
+}
+
+TEST(SceneParser, AdrIgnoresDampingWithAWarning) {
+  const pd::Scene s = pd::parse_scene(
+      yaml(minimal) + "  integrator: adr\n  damping: 100\neffects: [damping]\n", "s.yaml");
+  EXPECT_EQ(s.solver.integrator, pd::IntegratorKind::adr);
+  ASSERT_EQ(s.warnings.size(), 1u);
+  EXPECT_NE(s.warnings[0].find("s.yaml:15:12: warning: 'solver.damping' is ignored by the adr"),
+            std::string::npos)
+      << s.warnings[0];
+}
+
+TEST(SceneParser, ArkodeSectionWithAnotherIntegratorWarns) {
+  const pd::Scene s = pd::parse_scene(
+      yaml(minimal) + "  integrator: verlet\n  arkode:\n    table: rk4\n", "s.yaml");
+  ASSERT_EQ(s.warnings.size(), 1u);
+  EXPECT_NE(s.warnings[0].find("s.yaml:15:3: warning: 'solver.arkode' is ignored"),
+            std::string::npos)
+      << s.warnings[0];
+}
+
 } // namespace

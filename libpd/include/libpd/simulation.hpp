@@ -24,7 +24,11 @@ struct SteadyStateCriterion {
 
 struct SolverSpec {
   IntegratorKind integrator = IntegratorKind::damped_euler;
-  std::optional<double> dt; ///< nullopt: auto = safety × eq. 31
+  ArkodeSpec arkode; ///< `solver.arkode`, for the arkode integrator
+  /// nullopt: auto = safety × eq. 31 × the integrator's stability_scale() (β/2 for an RK table).
+  /// ADR iterates in fictitious time (Δt = 1); dt then only maps iterations onto the scene's time
+  /// axis (end_time, ramp_time).
+  std::optional<double> dt;
   double safety = 0.8;
   std::optional<double> end_time;
   SteadyStateCriterion steady;
@@ -48,6 +52,7 @@ std::string to_string(RunStatus status);
 struct RunResult {
   RunStatus status = RunStatus::end_time;
   std::size_t steps = 0;
+  std::size_t internal_steps = 0; ///< steps of the method (adaptive ARKode: its accepted steps)
   double time = 0;
   double dt = 0;
   double dt_stable = 0;
@@ -79,6 +84,9 @@ public:
     return state_.position[3 * i + c] - model_.particles.position[i][c];
   }
   const ForceEvaluator& forces() const { return *forces_; }
+  /// Add du (3N) to the positions of the unconstrained components before a run (stability
+  /// measurements start from a perturbed state).
+  void perturb(const std::vector<double>& du);
   const Integrator& integrator() const { return *integrator_; }
 
 private:

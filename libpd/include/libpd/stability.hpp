@@ -1,0 +1,88 @@
+// Stability limits of the explicit integrators, predicted and measured.
+//
+// Predictions. The conservative one is Miranda eq. 31 (`stable_time_step`, a Gershgorin bound).
+// The sharp one comes from the largest frequency ω_max of the linearised PD operator (Miranda
+// eq. 30, bond operator C = c ξ⊗ξ/|ξ|³ per unit neighbour volume) with the supports removed from
+// the free degrees of freedom: central differences (Verlet, Euler–Cromer) are stable for
+// Δt ≤ 2/ω_max; a Runge–Kutta table applied to y' = [v; −ω² u] is stable for Δt ≤ β/ω_max with β
+// the imaginary-axis stability interval of its stability polynomial R(z) (√3 for 3-stage order-3
+// tables, 2√2 for 4-stage order-4 tables), computed here from the Butcher table itself.
+//
+// Measurement. Bisection on a fixed Δt: a bounded run of N steps without loads or damping from a
+// small random perturbation of the free degrees of freedom is unstable if its energy grows by more
+// than a threshold or any value becomes non-finite.
+#pragma once
+
+#include "libpd/integrators.hpp"
+#include "libpd/model.hpp"
+#include "libpd/scene.hpp"
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace pd {
+
+/// Coefficients γ_k of R(z) = Σ_k γ_k z^k for an explicit table: γ_0 = 1, γ_k = bᵀ A^{k−1} 1.
+std::vector<double> stability_polynomial(const ButcherTableau& table);
+/// |R(iy)| for the polynomial's coefficients.
+double stability_modulus_on_imaginary_axis(const std::vector<double>& gamma, double y);
+/// Largest β such that |R(iy)| ≤ 1 for all y ∈ [0, β]; 0 if there is none (|R(iy)| > 1 for
+/// small y, as for Heun–Euler, Cash–Karp and Fehlberg 4(5)).
+double imaginary_stability_interval(const ButcherTableau& table);
+/// Largest y0 with |R(iy)|^steps ≤ amplification on [0, y0]: the interval a bounded run of
+/// `steps` steps can resolve. Equals β up to O(ln A / N) for tables whose |R| rises steeply past
+/// β; larger for tables that exceed 1 only marginally (Dormand–Prince between 1.0 and 1.5).
+double finite_horizon_interval(const ButcherTableau& table, std::size_t steps,
+                               double amplification);
+
+struct FrequencyEstimate {
+  double omega_max = 0; ///< [rad/s] (ADR: per unit fictitious time)
+  int iterations = 0;
+  double change = 0; ///< relative change of ω_max² over the last 10 iterations
+};
+
+/// ω_max² = largest eigenvalue of M⁻¹K on the free degrees of freedom (constraints removed), K
+/// the linearised bond operator at the reference configuration (broken bonds left out). `mass`
+/// is the mass density per degree of freedom (3N); empty: the material density. Lanczos
+/// iteration (a Krylov acceleration of the power iteration) on M^{-1/2} K M^{-1/2}.
+FrequencyEstimate max_frequency(const Model& model, const std::vector<double>& mass = {},
+                                int max_iterations = 300);
+
+/// What to measure: an integrator, and for arkode its table (fixed steps).
+struct StabilityTarget {
+  IntegratorKind kind = IntegratorKind::verlet;
+  ArkodeTable table = ArkodeTable::rk4;
+  std::string label() const;
+};
+
+struct StabilityOptions {
+  std::size_t steps = 1000; ///< N, steps of each bounded run
+  double growth = 1e3;      ///< unstable when the energy exceeds growth × its initial value
+  double relative_tolerance = 0.01; ///< bisection stops when hi/lo < 1 + this
+  double perturbation = 1e-6;       ///< amplitude of the random initial displacement, × spacing
+  std::uint64_t seed = 1;
+};
+
+struct StabilityResult {
+  std::string integrator;     ///< "verlet", "arkode:rk4", …
+  double measured = 0;        ///< largest Δt found stable [s]
+  double unstable = 0;        ///< smallest Δt found unstable [s]
+  double eq31 = 0;            ///< Miranda eq. 31 [s]
+  double sharp = 0;           ///< 2/ω_max or β/ω_max [s]
+  double interval = 0;        ///< 2 (central differences) or β of the table
+  double sharp_finite = 0;    ///< the same with the bounded run's growth budget (see .cpp)
+  double interval_finite = 0; ///< finite_horizon_interval for the run's N and amplification
+  double omega_max = 0;
+  int runs = 0;
+  double seconds = 0;
+};
+
+/// The model a stability measurement runs: the scene's, without loads, damping or ramps.
+Scene stability_scene(const Scene& scene);
+/// Bisection of the largest stable fixed Δt (see the file comment); omega_max > 0 skips the
+/// eigenvalue estimate (it depends only on the model).
+StabilityResult measure_stability(const Scene& scene, const StabilityTarget& target,
+                                  const StabilityOptions& options, double omega_max = 0);
+
+} // namespace pd
