@@ -1,0 +1,1 @@
+"""libpd verification report: stages (run the C++ tools), render (HTML + PNG), compare (CI diff)."""
