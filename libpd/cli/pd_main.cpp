@@ -592,6 +592,10 @@ int main(int argc, char** argv) {
   verify->add_option("cases", cases, "case names (default: all)");
   verify->add_option("-o,--output", verify_out, "output folder")->capture_default_str();
   verify->add_flag("--list", list, "list the cases");
+  bool sweep = false;
+  verify->add_flag("--sweep", sweep,
+                   "run the accuracy-vs-time sweep of each named case (the case CASE-sweep): one "
+                   "JSON row per run in DIR/CASE-sweep.jsonl");
   verify->add_option("--scenes", scenes_dir, "folder with the shipped scenes");
   verify->add_option("--threads", threads, "OpenMP threads (default: all)");
 
@@ -645,6 +649,11 @@ int main(int argc, char** argv) {
       return cmd_bench(scene, steps, threads, json, stretch, std::max(repeats, 1));
     }
     if (*verify) {
+      if (sweep) {
+        for (auto& c : cases) {
+          c += "-sweep";
+        }
+      }
       return cmd_verify(cases, verify_out, list, scenes_dir, threads);
     }
     if (*stability) {
