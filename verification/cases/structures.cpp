@@ -12,7 +12,7 @@
 // and FE are compared at the same physical point.
 //
 // Steady state, not step counts: the run stops at the scene's steady-state tolerance. The
-// paper-resolution case also reruns with a 100× tighter tolerance and reports the difference as
+// paper-resolution case also reruns with a 10× tighter tolerance and reports the difference as
 // the relaxation error, separately from the discretisation error (PD at the tight tolerance vs FE).
 #include "cases.hpp"
 #include "libpd/corrections.hpp"
@@ -427,9 +427,12 @@ Json run_structure(const Context& ctx, const std::string& case_name, bool fast) 
   settings["run"] = run.summary;
 
   if (!fast) {
-    // Relaxation error: the same model relaxed 100× further.
+    // Relaxation error: the same model relaxed 10× further in force (100× in kinetic energy,
+    // which goes with the square of the amplitude). Not further: the residual has a round-off
+    // floor near 1e-8 of the applied load (the stretch s = r/L − 1 of a bond at s ~ 1e-5 carries
+    // a relative error ~1e-11), so a 1e-8 tolerance is never reached.
     Scene tight = scene;
-    tight.solver.steady.force_tolerance *= 0.01;
+    tight.solver.steady.force_tolerance *= 0.1;
     tight.solver.steady.kinetic_tolerance *= 0.01;
     tight.solver.end_time = scene.solver.end_time.value_or(0) * 10;
     std::map<std::string, double> tight_values, tight_lines;
