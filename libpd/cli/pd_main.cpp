@@ -332,18 +332,6 @@ int cmd_stability(const std::vector<std::string>& scenes, std::vector<std::strin
 
 // ---- pd compare ------------------------------------------------------------------------------
 
-/// Modal series of the released bar, u(x, t) = Σ a_n sin(k_n x) cos(c k_n t) — the formula of
-/// verification/cases/bar_vibration.cpp (k_n = (2n − 1)π/(2L), a_n = 2ε(−1)^(n+1)/(L k_n²)).
-double bar_modal_series(double x, double t, double strain, double length, double wave_speed) {
-  double u = 0;
-  for (int n = 1; n <= 4000; ++n) {
-    const double k = (2.0 * n - 1.0) * std::numbers::pi / (2.0 * length);
-    const double a = 2.0 * strain * ((n % 2) ? 1.0 : -1.0) / (length * k * k);
-    u += a * std::sin(k * x) * std::cos(wave_speed * k * t);
-  }
-  return u;
-}
-
 struct CompareConfig {
   pd::IntegratorKind kind;
   pd::ArkodeTable table = pd::ArkodeTable::rk4;
@@ -473,7 +461,8 @@ int cmd_compare(const std::string& which, const std::string& out_file,
       for (std::size_t r = 0; r < n; ++r) {
         const double t = ro.history.time[r];
         const double u = ro.history.values[r][0];
-        const double e = u - bar_modal_series(x_probe, t, strain, length, wave_speed);
+        const double e =
+            u - pd::verification::bar_modal_series(x_probe, t, strain, length, wave_speed);
         rms += e * e;
         if (!ref_t.empty()) {
           const double er = u - reference_at(t);

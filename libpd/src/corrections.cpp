@@ -306,6 +306,22 @@ const char* to_string(VolumeCorrection v) {
   return "?";
 }
 
+std::array<const char*, all_surface_corrections.size()> surface_correction_names() {
+  std::array<const char*, all_surface_corrections.size()> names{};
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    names[i] = to_string(all_surface_corrections[i]);
+  }
+  return names;
+}
+
+std::array<const char*, all_volume_corrections.size()> volume_correction_names() {
+  std::array<const char*, all_volume_corrections.size()> names{};
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    names[i] = to_string(all_volume_corrections[i]);
+  }
+  return names;
+}
+
 MomentWeights moment_matched_weights(const ModelSpec& spec) {
   // For a homogeneous strain ε the bond-based energy density is W = (c/4) Σ_j w_j V |ξ_j|
   // (n_j·ε·n_j)², so the elastic tensor is (c/2) Σ_j w_j V |ξ_j| n⊗n⊗n⊗n. The continuum integral

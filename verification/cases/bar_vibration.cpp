@@ -18,9 +18,7 @@
 
 namespace pd::verification {
 
-namespace {
-
-double modal_series(double x, double t, double strain, double length, double wave_speed) {
+double bar_modal_series(double x, double t, double strain, double length, double wave_speed) {
   double u = 0;
   for (int n = 1; n <= 4000; ++n) {
     const double k = (2.0 * n - 1.0) * std::numbers::pi / (2.0 * length);
@@ -29,6 +27,8 @@ double modal_series(double x, double t, double strain, double length, double wav
   }
   return u;
 }
+
+namespace {
 
 /// Times where the signal changes sign, by linear interpolation.
 std::vector<double> zero_crossings(const std::vector<double>& t, const std::vector<double>& u) {
@@ -91,7 +91,7 @@ Json run_bar_vibration(const Context& ctx) {
   std::vector<double> pd_u, exact_u;
   for (std::size_t r = 0; r < run.history.time.size(); ++r) {
     pd_u.push_back(run.history.values[r][0]);
-    exact_u.push_back(modal_series(x_probe, run.history.time[r], strain, length, wave_speed));
+    exact_u.push_back(bar_modal_series(x_probe, run.history.time[r], strain, length, wave_speed));
   }
   const Oscillation pd_osc = analyse(run.history.time, pd_u);
   const Oscillation exact = analyse(run.history.time, exact_u);

@@ -35,21 +35,8 @@ namespace {
 constexpr double elongation_gate = 0.01;
 constexpr double lateral_gate = 0.05;
 
-// Correction names in enum order, so that index = enum value.
-const auto surface_names = [] {
-  std::array<const char*, all_surface_corrections.size()> names{};
-  for (std::size_t i = 0; i < names.size(); ++i) {
-    names[i] = to_string(all_surface_corrections[i]);
-  }
-  return names;
-}();
-const auto volume_names = [] {
-  std::array<const char*, all_volume_corrections.size()> names{};
-  for (std::size_t i = 0; i < names.size(); ++i) {
-    names[i] = to_string(all_volume_corrections[i]);
-  }
-  return names;
-}();
+const auto surface_names = surface_correction_names();
+const auto volume_names = volume_correction_names();
 
 Box box(const Vec3& lo, const Vec3& hi) {
   return Box{lo, hi};

@@ -45,21 +45,8 @@ struct Load {
 constexpr std::array<Load, 4> loads{
     {{"tension-x", 0, 0}, {"tension-y", 1, 1}, {"tension-z", 2, 2}, {"shear-xy", 0, 1}}};
 
-// Correction names in enum order, so that index = enum value.
-const auto surface_names = [] {
-  std::array<const char*, all_surface_corrections.size()> names{};
-  for (std::size_t i = 0; i < names.size(); ++i) {
-    names[i] = to_string(all_surface_corrections[i]);
-  }
-  return names;
-}();
-const auto volume_names = [] {
-  std::array<const char*, all_volume_corrections.size()> names{};
-  for (std::size_t i = 0; i < names.size(); ++i) {
-    names[i] = to_string(all_volume_corrections[i]);
-  }
-  return names;
-}();
+const auto surface_names = surface_correction_names();
+const auto volume_names = volume_correction_names();
 const std::array<const char*, 4> class_names{"interior", "face", "edge", "corner"};
 
 template <class Stretch>

@@ -32,6 +32,11 @@ const std::vector<Case>& all_cases();
 /// Default scenes folder: $PD_SCENES_DIR, else the source tree's verification/scenes.
 std::filesystem::path default_scenes_dir();
 
+/// Released bar fixed at x = 0, free at x = L, u(x, 0) = εx (bar-vibration): the modal series
+/// u(x, t) = Σ a_n sin(k_n x) cos(c k_n t), k_n = (2n − 1)π/(2L), a_n = 2ε(−1)^(n+1)/(L k_n²),
+/// summed over 4000 modes.
+double bar_modal_series(double x, double t, double strain, double length, double wave_speed);
+
 /// Relative error |a − b|/|b|.
 double relative_error(double value, double reference);
 

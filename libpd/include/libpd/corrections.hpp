@@ -74,6 +74,10 @@ inline constexpr std::array<VolumeCorrection, 4> all_volume_corrections{
     VolumeCorrection::none, VolumeCorrection::linear, VolumeCorrection::exact,
     VolumeCorrection::moment};
 
+/// All names in enum order (index = enum value), for tables over every combination.
+std::array<const char*, all_surface_corrections.size()> surface_correction_names();
+std::array<const char*, all_volume_corrections.size()> volume_correction_names();
+
 /// Moment-matched bond weights w = α + β Σ_a n_a⁴ (`volume_correction: moment`): the lattice
 /// sums Σ w V |ξ| n_x⁴ and Σ w V |ξ| n_x²n_y² over a bulk family equal the continuum integrals, so
 /// the bulk elastic constants are exact for homogeneous strain (the patch test's interior ratio
