@@ -48,6 +48,10 @@ Simulation::Simulation(Model& model, const SolverSpec& solver, const InitialSpec
   }
   ramp_.ramp_time = solver.ramp_time;
   apply_constraints(model, ramp_, 0.0, state_.position.data(), state_.velocity.data());
+  constrained_.assign(3 * n, 0);
+  for (const Constraint& c : model.constraints) {
+    constrained_[3 * c.particle + c.component] = 1;
+  }
 
   forces_ = make_force_evaluator(model);
   dt_stable_ = stable_time_step(model);
@@ -102,10 +106,6 @@ double Simulation::relative_residual() const {
   // Free degrees of freedom carry the out-of-balance force (b + F b_ext)·V; constrained ones carry
   // reactions, which normalise the residual when no load is applied.
   const double load = ramp_.factor(state_.time);
-  std::vector<std::uint8_t> constrained(3 * model_.size(), 0);
-  for (const Constraint& c : model_.constraints) {
-    constrained[3 * c.particle + c.component] = 1;
-  }
   const bool has_loads = !model_.external_force_density.empty();
   double residual = 0, applied = 0, reactions = 0;
   for (std::size_t i = 0; i < model_.size(); ++i) {
@@ -114,7 +114,7 @@ double Simulation::relative_residual() const {
       const std::size_t dof = 3 * i + c;
       const double ext = has_loads ? load * model_.external_force_density[dof] * vol : 0.0;
       const double f = state_.force[dof] * vol + ext;
-      if (constrained[dof]) {
+      if (constrained_[dof]) {
         reactions += f * f;
       } else {
         residual += f * f;

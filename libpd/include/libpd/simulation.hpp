@@ -6,6 +6,7 @@
 #include "libpd/model.hpp"
 
 #include <array>
+#include <cstdint>
 #include <functional>
 #include <optional>
 #include <string>
@@ -99,6 +100,8 @@ private:
   double dt_ = 0;
   double dt_stable_ = 0;
   double blowup_squared_ = 0;
+  /// 1 for each constrained degree of freedom; fixed for the run, so built once.
+  std::vector<std::uint8_t> constrained_;
 
   double relative_residual() const;
 };
