@@ -251,7 +251,7 @@ std::optional<pd::StabilityTarget> parse_target(const std::string& word) {
 }
 
 int cmd_stability(const std::vector<std::string>& scenes, std::vector<std::string> integrators,
-                  std::size_t steps, double tolerance, bool json, int threads) {
+                  std::size_t steps, double tolerance, double gate, bool json, int threads) {
   set_threads(threads);
   if (integrators.empty()) {
     integrators.push_back("verlet");
@@ -281,6 +281,7 @@ int cmd_stability(const std::vector<std::string>& scenes, std::vector<std::strin
   opt.steps = steps;
   opt.relative_tolerance = tolerance;
   pd::Json rows = pd::Json::array();
+  std::vector<std::string> gate_failures;
   if (!json) {
     fmt::print("{:<16} {:<24} {:>6} {:>10} {:>10} {:>10} {:>7} {:>7} {:>10} {:>7} {:>4} {:>6}\n",
                "case", "integrator", "beta", "measured", "eq31", "sharp", "m/sharp", "m/eq31",
@@ -312,6 +313,19 @@ int cmd_stability(const std::vector<std::string>& scenes, std::vector<std::strin
       j["steps_per_run"] = opt.steps;
       j["runs"] = r.runs;
       j["wall_seconds"] = r.seconds;
+      if (gate > 0) {
+        // The prediction the bounded run can be held to is the finite-horizon one; for Verlet
+        // the measured limit must also respect the conservative eq. 31 bound.
+        const double ratio = r.measured / r.sharp_finite;
+        if (!(std::abs(ratio - 1.0) <= gate)) {
+          gate_failures.push_back(
+              fmt::format("{} {}: measured / predicted = {:.4f}", name, r.integrator, ratio));
+        }
+        if (t.kind != pd::IntegratorKind::arkode && r.measured < r.eq31) {
+          gate_failures.push_back(fmt::format("{} {}: measured {:.4e} s below eq. 31 {:.4e} s",
+                                              name, r.integrator, r.measured, r.eq31));
+        }
+      }
       if (json) {
         rows.push_back(j);
       } else {
@@ -326,6 +340,13 @@ int cmd_stability(const std::vector<std::string>& scenes, std::vector<std::strin
   }
   if (json) {
     fmt::print("{}\n", rows.dump());
+  }
+  if (!gate_failures.empty()) {
+    fmt::print(stderr, "stability gate ({:.0f} %) failed:\n", 100 * gate);
+    for (const auto& f : gate_failures) {
+      fmt::print(stderr, "  {}\n", f);
+    }
+    return 4;
   }
   return 0;
 }
@@ -609,6 +630,10 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   stability->add_option("--tolerance", stability_tolerance, "relative bisection tolerance")
       ->capture_default_str();
+  double stability_gate = 0;
+  stability->add_option("--gate", stability_gate,
+                        "exit with status 4 unless every measured limit is within this fraction "
+                        "of the finite-horizon prediction (and, for Verlet, not below eq. 31)");
   stability->add_flag("--json", json, "machine-readable output");
   stability->add_option("--threads", threads, "OpenMP threads (default: all)");
 
@@ -654,7 +679,7 @@ int main(int argc, char** argv) {
     }
     if (*stability) {
       return cmd_stability(stability_scenes, stability_integrators, stability_steps,
-                           stability_tolerance, json, threads);
+                           stability_tolerance, stability_gate, json, threads);
     }
     if (*compare) {
       return cmd_compare(compare_what, compare_out, scenes_dir, compare_quick, threads);

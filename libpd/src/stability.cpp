@@ -4,11 +4,14 @@
 #include "libpd/simulation.hpp"
 #include "libpd/stable_time_step.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <complex>
 #include <fmt/format.h>
+#include <functional>
+#include <limits>
 #include <random>
 #include <stdexcept>
 
@@ -120,13 +123,6 @@ double imaginary_stability_interval(const ButcherTableau& table) {
   return interval_below(modulus_excess(stability_polynomial(table)), 0.0);
 }
 
-double finite_horizon_interval(const ButcherTableau& table, std::size_t steps,
-                               double amplification) {
-  // |R(iy)|^N ≤ A  ⇔  |R(iy)|² ≤ A^{2/N}.
-  const double excess = std::pow(amplification, 2.0 / static_cast<double>(steps)) - 1.0;
-  return interval_below(modulus_excess(stability_polynomial(table)), excess);
-}
-
 namespace {
 
 /// (K u) per unit volume for the linearised bond operator (Miranda eq. 30 with C = c ξ⊗ξ/|ξ|³):
@@ -195,85 +191,216 @@ double largest_tridiagonal_eigenvalue(const std::vector<double>& alpha,
 
 } // namespace
 
-FrequencyEstimate max_frequency(const Model& m, const std::vector<double>& mass,
-                                int max_iterations) {
-  // Symmetric form: with M = m_d V_i (mass per dof) and K_tot = V K (force, not force density),
-  // A = M^{-1/2} K_tot M^{-1/2} has the eigenvalues ω² of M⁻¹K; A w = sqrt(V_i/m_d) (K u),
-  // u = w / sqrt(m_d V_i).
-  const std::size_t ndof = 3 * m.size();
-  std::vector<double> scale(ndof, 0.0); // 1/sqrt(m_d V_i), 0 for constrained or absent dofs
-  std::vector<std::uint8_t> free(ndof, 1);
-  for (const Constraint& c : m.constraints) {
-    free[3 * c.particle + c.component] = 0;
-  }
-  const int dim = m.spec.dimension.dim;
-  for (std::size_t d = 0; d < ndof; ++d) {
-    if (static_cast<int>(d % 3) >= dim) {
-      free[d] = 0; // components outside the modelled space
+namespace {
+
+/// The linearised bond operator in symmetric form on the free degrees of freedom: with
+/// M = m_d V_i (mass per dof) and K_tot = V K (force, not force density),
+/// A = M^{-1/2} K_tot M^{-1/2} has the eigenvalues ω² of M⁻¹K; A w = sqrt(V_i/m_d) (K u) with
+/// u = w / sqrt(m_d V_i).
+class SymmetricBondOperator {
+public:
+  SymmetricBondOperator(const Model& m, const std::vector<double>& mass)
+      : m_(m), scale_(3 * m.size(), 0.0), u_(3 * m.size()), ku_(3 * m.size()) {
+    std::vector<std::uint8_t> free(3 * m.size(), 1);
+    for (const Constraint& c : m.constraints) {
+      free[3 * c.particle + c.component] = 0;
     }
-    const double md = mass.empty() ? m.density[d / 3] : mass[d];
-    if (free[d]) {
-      scale[d] = 1.0 / std::sqrt(md * m.particles.volume[d / 3]);
+    const int dim = m.spec.dimension.dim;
+    for (std::size_t d = 0; d < scale_.size(); ++d) {
+      const double md = mass.empty() ? m.density[d / 3] : mass[d];
+      if (free[d] && static_cast<int>(d % 3) < dim) {
+        scale_[d] = 1.0 / std::sqrt(md * m.particles.volume[d / 3]);
+      }
     }
   }
-  std::vector<double> q(ndof, 0.0), q_prev(ndof, 0.0), u(ndof), ku(ndof), w(ndof);
-  std::mt19937_64 rng(12345);
-  std::uniform_real_distribution<double> dist(-1.0, 1.0);
+  std::size_t size() const { return scale_.size(); }
+  bool is_free(std::size_t d) const { return scale_[d] > 0; }
+  /// w = M^{1/2} u: the coordinates of a displacement in which A is symmetric.
+  double to_symmetric(std::size_t d, double u) const { return is_free(d) ? u / scale_[d] : 0.0; }
+  void apply(const std::vector<double>& q, std::vector<double>& out) {
+    for (std::size_t d = 0; d < q.size(); ++d) {
+      u_[d] = q[d] * scale_[d];
+    }
+    apply_stiffness(m_, u_.data(), ku_.data());
+    for (std::size_t d = 0; d < q.size(); ++d) {
+      out[d] = ku_[d] * m_.particles.volume[d / 3] * scale_[d];
+    }
+  }
+
+private:
+  const Model& m_;
+  std::vector<double> scale_; // 1/sqrt(m_d V_i), 0 for constrained or absent dofs
+  std::vector<double> u_, ku_;
+};
+
+struct Tridiagonal {
+  std::vector<double> alpha, beta; ///< diagonal and off-diagonal of the Lanczos matrix T
+};
+
+/// Lanczos iteration (without reorthogonalisation) from q, which must be non-zero on free dofs
+/// only. `stop(T)` is asked after every iteration; the iteration also stops at an invariant
+/// subspace, where the Ritz values are exact.
+template <class Stop>
+Tridiagonal lanczos(SymmetricBondOperator& op, std::vector<double> q, int max_iterations,
+                    Stop stop) {
+  Tridiagonal t;
   double norm = 0;
-  for (std::size_t d = 0; d < ndof; ++d) {
-    q[d] = free[d] ? dist(rng) : 0.0;
-    norm += q[d] * q[d];
+  for (double x : q) {
+    norm += x * x;
   }
   norm = std::sqrt(norm);
   if (norm == 0) {
-    return {};
+    return t;
   }
   for (double& x : q) {
     x /= norm;
   }
-  std::vector<double> alpha, beta;
-  std::vector<double> history;
-  FrequencyEstimate est;
+  std::vector<double> q_prev(q.size(), 0.0), w(q.size());
   double b_prev = 0;
   for (int it = 0; it < max_iterations; ++it) {
-    for (std::size_t d = 0; d < ndof; ++d) {
-      u[d] = q[d] * scale[d];
-    }
-    apply_stiffness(m, u.data(), ku.data());
+    op.apply(q, w);
     double a = 0;
-    for (std::size_t d = 0; d < ndof; ++d) {
-      w[d] = free[d] ? ku[d] * m.particles.volume[d / 3] * scale[d] : 0.0;
+    for (std::size_t d = 0; d < q.size(); ++d) {
       a += w[d] * q[d];
     }
     double bnorm = 0;
-    for (std::size_t d = 0; d < ndof; ++d) {
+    for (std::size_t d = 0; d < q.size(); ++d) {
       w[d] -= a * q[d] + b_prev * q_prev[d];
       bnorm += w[d] * w[d];
     }
     bnorm = std::sqrt(bnorm);
-    alpha.push_back(a);
-    const double top = largest_tridiagonal_eigenvalue(alpha, beta);
-    history.push_back(top);
-    est.iterations = it + 1;
-    est.omega_max = std::sqrt(std::max(top, 0.0));
-    if (history.size() > 10) {
-      const double old = history[history.size() - 11];
-      est.change = std::abs(top - old) / std::max(top, 1e-300);
-      if (est.change < 1e-9) {
-        break;
-      }
+    t.alpha.push_back(a);
+    if (stop(t) || bnorm < 1e-14 * std::max(std::abs(a), 1e-300)) {
+      break;
     }
-    if (bnorm < 1e-14 * std::max(std::abs(top), 1e-300)) {
-      break; // invariant subspace: the Ritz values are exact
-    }
-    beta.push_back(bnorm);
+    t.beta.push_back(bnorm);
     q_prev = q;
-    for (std::size_t d = 0; d < ndof; ++d) {
+    for (std::size_t d = 0; d < q.size(); ++d) {
       q[d] = w[d] / bnorm;
     }
     b_prev = bnorm;
   }
+  t.beta.resize(t.alpha.empty() ? 0 : t.alpha.size() - 1);
+  return t;
+}
+
+} // namespace
+
+FrequencyEstimate max_frequency(const Model& m, const std::vector<double>& mass,
+                                int max_iterations) {
+  SymmetricBondOperator op(m, mass);
+  std::vector<double> q(op.size(), 0.0);
+  std::mt19937_64 rng(12345);
+  std::uniform_real_distribution<double> dist(-1.0, 1.0);
+  for (std::size_t d = 0; d < q.size(); ++d) {
+    const double r = dist(rng); // drawn for every dof, so the start does not depend on the supports
+    q[d] = op.is_free(d) ? r : 0.0;
+  }
+  FrequencyEstimate est;
+  std::vector<double> history;
+  lanczos(op, q, max_iterations, [&](const Tridiagonal& t) {
+    const double top = largest_tridiagonal_eigenvalue(t.alpha, t.beta);
+    history.push_back(top);
+    est.iterations = static_cast<int>(history.size());
+    est.omega_max = std::sqrt(std::max(top, 0.0));
+    if (history.size() > 10) {
+      const double old = history[history.size() - 11];
+      est.change = std::abs(top - old) / std::max(top, 1e-300);
+      return est.change < 1e-9;
+    }
+    return false;
+  });
   return est;
+}
+
+PerturbationSpectrum perturbation_spectrum(const Model& m, const std::vector<double>& du,
+                                           int iterations) {
+  SymmetricBondOperator op(m, {});
+  std::vector<double> x(op.size(), 0.0);
+  double norm2 = 0;
+  for (std::size_t d = 0; d < x.size(); ++d) {
+    x[d] = op.to_symmetric(d, du[d]);
+    norm2 += x[d] * x[d];
+  }
+  const Tridiagonal t = lanczos(op, x, iterations, [](const Tridiagonal&) { return false; });
+  PerturbationSpectrum s;
+  if (t.alpha.empty()) {
+    return s;
+  }
+  // Gauss quadrature of the spectral measure of x (Golub & Meurant, Matrices, Moments and
+  // Quadrature, ch. 6): nodes = eigenvalues θ_k of T, weights = |x|² (first component of its
+  // k-th eigenvector)². The strain energy ½ xᵀAx splits into ½ |x|² w_k θ_k per node.
+  const auto k = static_cast<Eigen::Index>(t.alpha.size());
+  Eigen::MatrixXd tm = Eigen::MatrixXd::Zero(k, k);
+  for (Eigen::Index i = 0; i < k; ++i) {
+    tm(i, i) = t.alpha[static_cast<std::size_t>(i)];
+    if (i + 1 < k) {
+      tm(i, i + 1) = tm(i + 1, i) = t.beta[static_cast<std::size_t>(i)];
+    }
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(tm);
+  for (Eigen::Index i = 0; i < k; ++i) {
+    const double theta = std::max(eig.eigenvalues()(i), 0.0);
+    const double w = eig.eigenvectors()(0, i) * eig.eigenvectors()(0, i);
+    s.omega_squared.push_back(theta);
+    s.energy.push_back(0.5 * norm2 * w * theta);
+  }
+  return s;
+}
+
+double bounded_run_limit(const PerturbationSpectrum& spectrum,
+                         const std::function<double(double)>& log_amplification, std::size_t steps,
+                         double growth) {
+  double total = 0, theta_max = 0;
+  for (std::size_t k = 0; k < spectrum.energy.size(); ++k) {
+    total += spectrum.energy[k];
+    theta_max = std::max(theta_max, spectrum.omega_squared[k]);
+  }
+  if (!(total > 0) || !(theta_max > 0)) {
+    return 0;
+  }
+  const double n2 = 2.0 * static_cast<double>(steps);
+  // log(E_N / E_0) with E_N = Σ_k e_k |a(ω_k Δt)|^{2N}, in logs because |a|^{2N} overflows.
+  auto log_growth = [&](double dt) {
+    double top = -std::numeric_limits<double>::infinity();
+    std::vector<double> terms(spectrum.energy.size());
+    for (std::size_t k = 0; k < terms.size(); ++k) {
+      const double y = std::sqrt(spectrum.omega_squared[k]) * dt;
+      terms[k] = spectrum.energy[k] > 0 ? std::log(spectrum.energy[k]) + n2 * log_amplification(y)
+                                        : -std::numeric_limits<double>::infinity();
+      top = std::max(top, terms[k]);
+    }
+    double sum = 0;
+    for (double v : terms) {
+      sum += std::exp(v - top);
+    }
+    return top + std::log(sum) - std::log(total);
+  };
+  const double limit = std::log(growth);
+  const double omega_max = std::sqrt(theta_max);
+  // Scan ω_max Δt upwards, then bisect the first crossing.
+  double lo = 0, y = 0.01;
+  for (; y < 20; y *= 1.01) {
+    if (!(log_growth(y / omega_max) <= limit)) {
+      break;
+    }
+    lo = y;
+  }
+  double hi = y;
+  for (int it = 0; it < 60; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    (log_growth(mid / omega_max) <= limit ? lo : hi) = mid;
+  }
+  return lo / omega_max;
+}
+
+double central_difference_log_amplification(double y) {
+  // μ² − (2 − y²)μ + 1 = 0: |μ| = 1 up to y = 2, then the larger root grows.
+  if (y <= 2) {
+    return 0;
+  }
+  const double b = y * y - 2.0;
+  return std::log(0.5 * (b + std::sqrt(b * b - 4.0)));
 }
 
 std::string StabilityTarget::label() const {
@@ -314,25 +441,6 @@ StabilityResult measure_stability(const Scene& scene, const StabilityTarget& tar
     r.interval = 2.0;
   }
   r.sharp = r.interval / omega_max;
-  // The bounded run's own criterion: a mode must grow in amplitude by about sqrt(growth × free
-  // dofs) to lift the total energy by `growth`, within N steps.
-  std::size_t free_dofs = 0;
-  for (std::size_t d = 0; d < 3 * model.size(); ++d) {
-    free_dofs += static_cast<int>(d % 3) < s.model.dimension.dim ? 1 : 0;
-  }
-  free_dofs -= std::min(free_dofs, model.constraints.size());
-  const double amplification = std::sqrt(opt.growth * static_cast<double>(free_dofs));
-  if (target.kind == IntegratorKind::arkode) {
-    r.interval_finite =
-        finite_horizon_interval(butcher_tableau(target.table), opt.steps, amplification);
-  } else {
-    // Central differences: |μ| = 1 up to hω = 2, beyond it the larger root of
-    // μ² − (2 − y²)μ + 1 = 0 grows as fast as an RK table's |R| grows past β.
-    const double a = std::pow(amplification, 1.0 / static_cast<double>(opt.steps));
-    r.interval_finite = std::sqrt(2.0 + a + 1.0 / a); // y² = 2 + μ + 1/μ at μ = −a
-  }
-  r.sharp_finite = r.interval_finite / omega_max;
-
   // The same random perturbation for every trial, on the free components within the dimension.
   std::vector<double> du(3 * model.size(), 0.0);
   {
@@ -345,6 +453,23 @@ StabilityResult measure_stability(const Scene& scene, const StabilityTarget& tar
       }
     }
   }
+  // The bounded run's own criterion, predicted: the perturbation's energy, spread over the modes
+  // by its spectral measure, grows by |a(ω Δt)|^{2N} per mode (a = R(iy) for an RK table, the
+  // larger root of central differences); unstable once the sum exceeds `growth`. Tables with
+  // |R(iy)| barely above 1 (Dormand–Prince past β, Heun–Euler, Cash–Karp and Fehlberg near 0)
+  // have a finite limit here although their infinite-horizon interval is smaller or zero.
+  const PerturbationSpectrum spectrum = perturbation_spectrum(model, du);
+  if (target.kind == IntegratorKind::arkode) {
+    const std::vector<double> gamma = stability_polynomial(butcher_tableau(target.table));
+    r.sharp_finite = bounded_run_limit(
+        spectrum, [&](double y) { return std::log(stability_modulus_on_imaginary_axis(gamma, y)); },
+        opt.steps, opt.growth);
+  } else {
+    r.sharp_finite =
+        bounded_run_limit(spectrum, central_difference_log_amplification, opt.steps, opt.growth);
+  }
+  r.interval_finite = r.sharp_finite * omega_max;
+
   auto stable_at = [&](double dt) {
     ++r.runs;
     SolverSpec solver = s.solver;

@@ -18,6 +18,7 @@
 #include "libpd/scene.hpp"
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -30,11 +31,6 @@ double stability_modulus_on_imaginary_axis(const std::vector<double>& gamma, dou
 /// Largest β such that |R(iy)| ≤ 1 for all y ∈ [0, β]; 0 if there is none (|R(iy)| > 1 for
 /// small y, as for Heun–Euler, Cash–Karp and Fehlberg 4(5)).
 double imaginary_stability_interval(const ButcherTableau& table);
-/// Largest y0 with |R(iy)|^steps ≤ amplification on [0, y0]: the interval a bounded run of
-/// `steps` steps can resolve. Equals β up to O(ln A / N) for tables whose |R| rises steeply past
-/// β; larger for tables that exceed 1 only marginally (Dormand–Prince between 1.0 and 1.5).
-double finite_horizon_interval(const ButcherTableau& table, std::size_t steps,
-                               double amplification);
 
 struct FrequencyEstimate {
   double omega_max = 0; ///< [rad/s] (ADR: per unit fictitious time)
@@ -48,6 +44,26 @@ struct FrequencyEstimate {
 /// iteration (a Krylov acceleration of the power iteration) on M^{-1/2} K M^{-1/2}.
 FrequencyEstimate max_frequency(const Model& model, const std::vector<double>& mass = {},
                                 int max_iterations = 300);
+
+/// Spectral measure of a displacement perturbation of the free degrees of freedom: nodes ω_k²
+/// of M⁻¹K and the strain energy e_k of the perturbation near each node (Gauss quadrature from
+/// `iterations` Lanczos steps started at the perturbation; Σ e_k = its strain energy).
+struct PerturbationSpectrum {
+  std::vector<double> omega_squared;
+  std::vector<double> energy;
+};
+PerturbationSpectrum perturbation_spectrum(const Model& model, const std::vector<double>& du,
+                                           int iterations = 200);
+
+/// Largest Δt at which a bounded run of `steps` steps from the perturbation keeps its energy
+/// within `growth` × the initial one, if each mode's energy is multiplied by
+/// exp(2 N log_amplification(ω Δt)) (log |R(iy)| of an RK table, or of the growing root of
+/// central differences): the sharp prediction of what `measure_stability` measures.
+double bounded_run_limit(const PerturbationSpectrum& spectrum,
+                         const std::function<double(double)>& log_amplification, std::size_t steps,
+                         double growth);
+/// log |μ| of the larger root of central differences (Verlet) for y = ω Δt: 0 up to y = 2.
+double central_difference_log_amplification(double y);
 
 /// What to measure: an integrator, and for arkode its table (fixed steps).
 struct StabilityTarget {
@@ -71,8 +87,8 @@ struct StabilityResult {
   double eq31 = 0;            ///< Miranda eq. 31 [s]
   double sharp = 0;           ///< 2/ω_max or β/ω_max [s]
   double interval = 0;        ///< 2 (central differences) or β of the table
-  double sharp_finite = 0;    ///< the same with the bounded run's growth budget (see .cpp)
-  double interval_finite = 0; ///< finite_horizon_interval for the run's N and amplification
+  double sharp_finite = 0;    ///< bounded_run_limit for the run's N, growth and perturbation
+  double interval_finite = 0; ///< sharp_finite × ω_max
   double omega_max = 0;
   int runs = 0;
   double seconds = 0;
