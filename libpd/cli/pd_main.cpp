@@ -1,6 +1,7 @@
 // pd — the libpd command line.
 //
 //   pd run SCENE [-o DIR] [--threads N]       run a scene, write summary.json, probes.csv, VTU
+//          [--checkpoint-every N] [--checkpoint FILE] [--restart FILE]
 //   pd info SCENE [--json]                    sizes, memory estimate, stable time step
 //   pd bench SCENE [--steps N] [--threads N]  force-evaluation throughput
 //   pd verify [CASE...] [-o DIR] [--list]     verification cases with their gates
@@ -60,13 +61,26 @@ pd::Scene load_or_explain(const std::string& path) {
   return scene;
 }
 
-int cmd_run(const std::string& scene_path, const std::string& out_dir, int threads) {
+struct CheckpointArgs {
+  std::size_t every = 0;
+  std::string file;
+  std::string restart;
+};
+
+int cmd_run(const std::string& scene_path, const std::string& out_dir, int threads,
+            const CheckpointArgs& ck) {
   set_threads(threads);
   const pd::Scene scene = load_or_explain(scene_path);
   pd::RunOptions opt;
   opt.output_dir = out_dir;
   opt.progress = ::isatty(STDERR_FILENO) != 0;
+  opt.checkpoint_every = ck.every;
+  opt.checkpoint = ck.file;
+  opt.restart = ck.restart;
   const pd::RunOutcome out = pd::run_scene(scene, opt);
+  if (out.restarted_from_step) {
+    fmt::print("restarted from {} at step {}\n", ck.restart, *out.restarted_from_step);
+  }
   fmt::print(
       "{}: {} particles, {} bonds, {} steps of {:.4g} s (eq. 31 limit {:.4g} s), status {}\n",
       scene_path, out.particles, out.bonds, out.result.steps, out.result.dt, out.result.dt_stable,
@@ -80,6 +94,15 @@ int cmd_run(const std::string& scene_path, const std::string& out_dir, int threa
   }
   if (!out_dir.empty()) {
     fmt::print("results in {}/summary.json\n", out_dir);
+  }
+  if (!out.checkpoint.empty()) {
+    fmt::print("checkpoint {} (step {}); to continue: pd run {} -o {} --restart {}{}\n",
+               out.checkpoint.string(), out.checkpoint_step, scene_path, out_dir,
+               out.checkpoint.string(),
+               ck.every > 0 ? fmt::format(" --checkpoint-every {}", ck.every) : "");
+  }
+  if (!out.checkpoint_note.empty()) {
+    fmt::print(stderr, "warning: {}\n", out.checkpoint_note);
   }
   if (out.result.status == pd::RunStatus::unstable) {
     fmt::print(stderr, "error: {}\n", out.result.message);
@@ -581,6 +604,15 @@ int main(int argc, char** argv) {
   run->add_option("-o,--output", out_dir, "output folder")->capture_default_str();
   run->add_option("--threads", threads, "OpenMP threads (default: all)");
   run->add_flag("--print-defaults", print_defaults, "print a commented scene template and exit");
+  CheckpointArgs ckpt;
+  run->add_option("--checkpoint-every", ckpt.every,
+                  "write the complete run state every N steps (atomically; also at the end and "
+                  "on Ctrl-C)");
+  run->add_option("--checkpoint", ckpt.file, "checkpoint file (default: OUTDIR/checkpoint.pdcp)");
+  run->add_option("--restart", ckpt.restart,
+                  "continue from a checkpoint of the same scene; the result is bitwise that of an "
+                  "uninterrupted run")
+      ->check(CLI::ExistingFile);
 
   bool json = false;
   auto* info = app.add_subcommand("info", "Particles, bonds, memory estimate and stable time step");
@@ -661,7 +693,7 @@ int main(int argc, char** argv) {
         fmt::print(stderr, "error: pd run needs a scene file (or --print-defaults)\n");
         return 1;
       }
-      return cmd_run(scene, out_dir, threads);
+      return cmd_run(scene, out_dir, threads, ckpt);
     }
     if (*info) {
       return cmd_info(scene, json);

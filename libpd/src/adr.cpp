@@ -26,6 +26,7 @@
 // (λ = ¼ Σ_j k_ij) would be unstable: for the 1D bar with m = 3.015 and the linear volume
 // correction the alternating mode v_j = (−1)^j has (Kv)_i = Σ_{j at odd distance} 2 k_ij v_i
 // ≈ 1.40 (Σ_j k_ij) v_i, beyond 4λ = Σ_j k_ij.
+#include "libpd/checkpoint.hpp"
 #include "libpd/force_kernel.hpp"
 #include "libpd/integrators.hpp"
 
@@ -152,6 +153,22 @@ public:
 
   double last_damping() const {
     return last_damping_;
+  }
+
+protected:
+  // λ and the constraint mask follow from the model; the half-step velocity and F^{n−1} are
+  // history (the damping c_n of the next step is computed from them).
+  void save_state(CheckpointWriter& w) const override {
+    w.boolean(started_);
+    w.f64(last_damping_);
+    w.doubles(velocity_);
+    w.doubles(previous_);
+  }
+  void restore_state(CheckpointReader& r) override {
+    started_ = r.boolean();
+    last_damping_ = r.f64();
+    velocity_ = r.doubles(velocity_.size(), "ADR velocity");
+    previous_ = r.doubles(previous_.size(), "ADR previous force");
   }
 
 private:

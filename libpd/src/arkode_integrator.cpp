@@ -32,6 +32,20 @@
 // that are not FSAL (heun-euler, rk4) the integrator calls ERKStepReset before every step, which
 // makes ERKStep recompute f(t_n, y_n) for the first stage: s right-hand sides per step, the correct
 // count for a non-FSAL table. Native tables with c_s ≠ 1 or true FSAL need no work-around.
+//
+// Checkpoints (fixed steps). A continuing ERKStep enters step n+1 with f(t_n, y_n) in hand:
+// evaluated at the end of step n (c_s ≠ 1) or copied from step n's last stage (c_s = 1). For FSAL
+// tables that stage is f at z_s = y_{n−1} + h Σ_j a_sj F_j with a_s = bᵀ, the sum that gives y_n
+// (b_s = 0 adds an exact zero), so it is f(t_n, y_n) bit for bit. A restored run keeps [u; v]
+// bitwise (not y = X + u, which would round u) and starts a fresh ERKStep from it, which evaluates
+// f(t_n, y_n) itself: the same bits, and an evaluation the saved run has already counted, so it is
+// not counted twice (checkpoint_test compares states and counters for rk4, knoth-wolke,
+// bogacki-shampine and dormand-prince). The work-around tables reset ERKStep before every step, so
+// a restart is like any of their steps. Refused: tables with c_s = 1 that are not FSAL run without
+// the work-around (their copied stage is not f(t_n, y_n) and cannot be rebuilt), and adaptive
+// steps (step size, error-controller history and stability-limited step live inside ERKStep and
+// cannot be set back).
+#include "libpd/checkpoint.hpp"
 #include "libpd/force_kernel.hpp"
 #include "libpd/integrators.hpp"
 #include "libpd/stability.hpp"
@@ -181,7 +195,10 @@ public:
 
   StepReport step(State& st, double dt) override {
     ++calls_;
-    if (memory_ == nullptr || st.time != time_) {
+    if (restored_) {
+      restored_ = false;
+      start();
+    } else if (memory_ == nullptr || st.time != time_) {
       load(st);
     }
     const double t_out = time_ + dt;
@@ -218,7 +235,7 @@ public:
     }
     long steps = 0;
     ERKStepGetNumSteps(memory_, &steps);
-    internal_steps_ = static_cast<std::size_t>(steps); // ERKStepReset keeps the counters
+    internal_steps_ = steps_before_ + static_cast<std::size_t>(steps); // Reset keeps counters
     time_ = t_out;
     st.time = t_out;
     ++st.step;
@@ -241,7 +258,59 @@ public:
     return beta_ > 0 ? 0.5 * beta_ : 0.5;
   }
 
+  std::string checkpoint_refusal() const override {
+    if (spec_.adaptive) {
+      return "adaptive ARKode steps cannot be checkpointed: the step size and the error "
+             "controller's history live inside SUNDIALS and cannot be restored (use fixed steps, "
+             "solver.arkode.adaptive: false, or run without checkpoints)";
+    }
+    if (copies_last_stage() && !is_fsal()) {
+      return fmt::format("ARKode table '{}' without the issue #311 work-around carries a stale "
+                         "first stage from step to step, which a restart cannot reproduce",
+                         tableau_.name);
+    }
+    return {};
+  }
+
+protected:
+  void save_state(CheckpointWriter& w) const override {
+    if (const std::string why = checkpoint_refusal(); !why.empty()) {
+      throw CheckpointError(why);
+    }
+    w.f64(time_);
+    w.u64(internal_steps_);
+    w.doubles(buffer_);
+  }
+
+  void restore_state(CheckpointReader& r) override {
+    if (const std::string why = checkpoint_refusal(); !why.empty()) {
+      r.fail(why);
+    }
+    time_ = r.f64();
+    internal_steps_ = r.u64();
+    steps_before_ = internal_steps_;
+    const std::vector<double> saved = r.doubles(buffer_.size(), "ARKode state [u; v]");
+    std::copy(saved.begin(), saved.end(), buffer_.begin()); // y_ wraps buffer_'s storage
+    if (memory_ != nullptr) {
+      ERKStepFree(&memory_); // the next step starts a fresh ERKStep from the restored [u; v]
+      memory_ = nullptr;
+    }
+    fixed_dt_ = 0;
+    restored_ = true;
+    // A fresh ERKStep evaluates f(t_n, y_n), which the saved run had already evaluated (and
+    // counted) or copied at the end of its last step; the work-around tables reset every step
+    // anyway.
+    uncounted_evaluations_ = reset_each_step_ ? 0 : 1;
+  }
+
 private:
+  /// ERKStep 6.4.1 reuses the last stage as the next first stage (c_s = 1, no reset per step).
+  bool copies_last_stage() const {
+    return !reset_each_step_ && tableau_.stages > 0 &&
+           tableau_.c[static_cast<std::size_t>(tableau_.stages - 1)] == 1.0;
+  }
+  bool is_fsal() const { return !tableau_.hit_by_issue_311(); }
+
   static int rhs(sunrealtype t, N_Vector y, N_Vector ydot, void* data) {
     auto* self = static_cast<ArkodeIntegrator*>(data);
     self->evaluate(t, N_VGetArrayPointer(y), N_VGetArrayPointer(ydot));
@@ -274,7 +343,11 @@ private:
     }
     apply_constraints(model_, ramp_, t, pos, nullptr);
     forces_.compute(pos, b);
-    ++force_evaluations_;
+    if (uncounted_evaluations_ > 0) {
+      --uncounted_evaluations_;
+    } else {
+      ++force_evaluations_;
+    }
     const double load = ramp_.factor(t);
     const double rate = ramp_.rate(t);
     const double* ext =
@@ -306,10 +379,15 @@ private:
       buffer_[d] = st.position[d] - x[d / 3][d % 3];
       buffer_[ndof_ + d] = st.velocity[d];
     }
+    time_ = st.time;
+    start();
+  }
+
+  /// (Re)start ERKStep at time_ from buffer_.
+  void start() {
     for (const Constraint& c : model_.constraints) {
       constraint_rate_[3 * c.particle + c.component] = c.value;
     }
-    time_ = st.time;
     steps_in_run_ = 0;
     if (memory_ == nullptr) {
       memory_ = ERKStepCreate(rhs, time_, y_, context_);
@@ -319,6 +397,9 @@ private:
       ERKStepSetUserData(memory_, this);
       ERKStepSetErrHandlerFn(memory_, silence, nullptr);
       std::vector<double> a(tableau_.a);
+      if (table_ != nullptr) {
+        ARKodeButcherTable_Free(table_); // a restore starts a second ERKStep
+      }
       table_ = ARKodeButcherTable_Create(
           tableau_.stages, tableau_.order, tableau_.embedded_order,
           const_cast<double*>(tableau_.c.data()), a.data(), const_cast<double*>(tableau_.b.data()),
@@ -377,6 +458,9 @@ private:
   double fixed_dt_ = 0;
   std::size_t steps_in_run_ = 0;
   std::size_t internal_steps_ = 0;
+  std::size_t steps_before_ = 0; ///< internal steps before a restore (a new ERKStep counts from 0)
+  bool restored_ = false;
+  std::size_t uncounted_evaluations_ = 0;
 };
 
 } // namespace

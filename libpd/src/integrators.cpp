@@ -1,6 +1,9 @@
 #include "libpd/integrators.hpp"
 
+#include "libpd/checkpoint.hpp"
+
 #include <cmath>
+#include <fmt/format.h>
 #include <limits>
 #include <stdexcept>
 
@@ -55,6 +58,25 @@ bool ButcherTableau::hit_by_issue_311() const {
     }
   }
   return false;
+}
+
+void Integrator::save(CheckpointWriter& w) const {
+  w.section("INTG");
+  w.string(name());
+  w.u64(force_evaluations_);
+  w.u64(calls_);
+  save_state(w);
+}
+
+void Integrator::restore(CheckpointReader& r) {
+  r.section("INTG");
+  const std::string saved = r.string();
+  if (saved != name()) {
+    r.fail(fmt::format("written by integrator '{}', this run uses '{}'", saved, name()));
+  }
+  force_evaluations_ = r.u64();
+  calls_ = r.u64();
+  restore_state(r);
 }
 
 void apply_constraints(const Model& model, const LoadRamp& ramp, double t, double* position,
@@ -177,6 +199,16 @@ public:
 
   std::string name() const override {
     return "verlet";
+  }
+
+protected:
+  // The first step computes the force at the initial positions; later steps reuse State::force,
+  // which the checkpoint holds.
+  void save_state(CheckpointWriter& w) const override {
+    w.boolean(primed_);
+  }
+  void restore_state(CheckpointReader& r) override {
+    primed_ = r.boolean();
   }
 
 private:

@@ -1,5 +1,6 @@
 #include "libpd/simulation.hpp"
 
+#include "libpd/checkpoint.hpp"
 #include "libpd/stable_time_step.hpp"
 
 #include <chrono>
@@ -126,6 +127,51 @@ double Simulation::relative_residual() const {
   return reference > 0 ? std::sqrt(residual / reference) : std::sqrt(residual);
 }
 
+void Simulation::save(CheckpointWriter& w) const {
+  w.section("STAT");
+  w.f64(state_.time);
+  w.u64(state_.step);
+  w.u64(run_origin_);
+  w.f64(dt_);
+  w.doubles(state_.position);
+  w.doubles(state_.velocity);
+  w.doubles(state_.force);
+  w.section("BOND");
+  w.bytes(model_.state.broken);
+  w.doubles(model_.state.plastic_stretch);
+  w.doubles(model_.state.damage);
+  integrator_->save(w);
+}
+
+void Simulation::restore(CheckpointReader& r) {
+  r.section("STAT");
+  State st;
+  st.time = r.f64();
+  st.step = static_cast<std::size_t>(r.u64());
+  const auto origin = static_cast<std::size_t>(r.u64());
+  const double dt = r.f64();
+  if (dt != dt_) { // the fingerprint compares Δt too; this guards library callers
+    r.fail(fmt::format("Δt {} differs from this run's {}", dt, dt_));
+  }
+  const std::size_t ndof = state_.position.size();
+  st.position = r.doubles(ndof, "positions");
+  st.velocity = r.doubles(ndof, "velocities");
+  st.force = r.doubles(ndof, "forces");
+  r.section("BOND");
+  auto broken = r.bytes(model_.state.broken.size(), "broken-bond flags");
+  auto plastic = r.doubles(model_.state.plastic_stretch.size(), "plastic stretches");
+  auto damage = r.doubles(model_.state.damage.size(), "damage indices");
+  integrator_->restore(r);
+  // Nothing is changed until everything has been read: a bad checkpoint leaves the run as it was
+  // (except the integrator, which only restores after its own checks).
+  state_ = std::move(st);
+  model_.state.broken = std::move(broken);
+  model_.state.plastic_stretch = std::move(plastic);
+  model_.state.damage = std::move(damage);
+  run_origin_ = origin;
+  resumed_ = true;
+}
+
 RunResult Simulation::run(const Observer& observer) {
   using clock = std::chrono::steady_clock;
   const auto start = clock::now();
@@ -135,7 +181,11 @@ RunResult Simulation::run(const Observer& observer) {
   r.residual = std::numeric_limits<double>::quiet_NaN();
   const std::size_t end_steps =
       solver_.end_time ? static_cast<std::size_t>(std::ceil(*solver_.end_time / dt_ - 1e-9)) : 0;
-  const std::size_t first_step = state_.step;
+  if (!resumed_) {
+    run_origin_ = state_.step;
+  }
+  resumed_ = false;
+  const std::size_t first_step = run_origin_;
   for (;;) {
     if (solver_.end_time && state_.step >= end_steps) {
       r.status = RunStatus::end_time;

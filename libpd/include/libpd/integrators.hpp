@@ -107,6 +107,9 @@ struct StepReport {
   std::size_t max_displacement_particle = 0;
 };
 
+class CheckpointWriter;
+class CheckpointReader;
+
 class Integrator {
 public:
   virtual ~Integrator() = default;
@@ -121,7 +124,19 @@ public:
   /// the factor on the eq. 31 step that keeps the same margin. 1 for the Störmer-type schemes.
   virtual double stability_scale() const { return 1.0; }
 
+  /// Checkpoints: everything the next step() reads besides the State and the model's bond
+  /// history (counters, the integrator's own vectors and flags), so that a restored run continues
+  /// bitwise. save() writes the name and counters, then save_state(); restore() reads them back and
+  /// refuses a checkpoint of another integrator.
+  void save(CheckpointWriter& w) const;
+  void restore(CheckpointReader& r);
+  /// Empty if a checkpoint can continue this integrator bitwise; otherwise the reason it cannot.
+  virtual std::string checkpoint_refusal() const { return {}; }
+
 protected:
+  virtual void save_state(CheckpointWriter&) const {}
+  virtual void restore_state(CheckpointReader&) {}
+
   std::size_t force_evaluations_ = 0;
   std::size_t calls_ = 0;
 };

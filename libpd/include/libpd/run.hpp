@@ -2,12 +2,14 @@
 // Used by `pd run`, the verification cases and the tests, so all of them produce the same files.
 #pragma once
 
+#include "libpd/checkpoint.hpp"
 #include "libpd/output.hpp"
 #include "libpd/scene.hpp"
 #include "libpd/simulation.hpp"
 
 #include <filesystem>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -29,6 +31,16 @@ struct RunOptions {
   bool write_vtu = true;
   bool stop_on_interrupt = true; ///< SIGINT ends the run cleanly with status `interrupted`
   bool keep_final_field = false; ///< return reference positions and final displacements
+  /// Checkpoints (checkpoint.hpp): the complete run state every `checkpoint_every` steps (0:
+  /// never), at the end of such a run, and when SIGINT interrupts any run that has a checkpoint
+  /// path. The path is `checkpoint`, or output_dir/checkpoint.pdcp if that is empty.
+  std::size_t checkpoint_every = 0;
+  std::filesystem::path checkpoint;
+  /// Continue from this checkpoint: it must fingerprint-match the scene (same model, Δt,
+  /// integrator, probes); only when the run stops (end_time, max_steps, steady) and the VTU output
+  /// may differ. The restored probe history continues, so probes.csv ends as an uninterrupted
+  /// run's.
+  std::filesystem::path restart;
 };
 
 struct ProbeHistory {
@@ -48,7 +60,23 @@ struct RunOutcome {
   /// particle), e.g. to extract deflection lines.
   std::vector<Vec3> positions;
   std::vector<double> displacement;
+  std::filesystem::path checkpoint; ///< last checkpoint written (empty: none)
+  std::size_t checkpoint_step = 0;  ///< its step
+  std::size_t checkpoints_written = 0;
+  std::optional<std::size_t> restarted_from_step; ///< set when RunOptions::restart was used
+  std::string checkpoint_note; ///< why no checkpoint was written on interrupt, if none was
 };
+
+/// What makes a run, for checkpoints: sizes, Δt, integrator, kernel, effects, damping, ramp, probes
+/// and a hash of the model's arrays (positions, volumes, bonds, bond parameters, supports, loads).
+/// Stop criteria (end_time, max_steps, steady) and output settings other than history_every are
+/// left out, so a restart may extend a run.
+CheckpointFingerprint run_fingerprint(const Scene& scene, const Simulation& sim,
+                                      const std::vector<ResolvedProbe>& probes);
+
+/// Default checkpoint path of a run: options.checkpoint, else output_dir/checkpoint.pdcp (empty
+/// if neither is set).
+std::filesystem::path checkpoint_path(const RunOptions& options);
 
 /// Run a scene and (if output_dir is set) write summary.json, probes.csv and VTU files there.
 /// An unstable run returns status `unstable` with the message; nothing non-finite is written.

@@ -90,6 +90,14 @@ public:
   void perturb(const std::vector<double>& du);
   const Integrator& integrator() const { return *integrator_; }
 
+  /// Checkpoints (checkpoint.hpp): the State, the model's bond history (broken bonds, damage,
+  /// plastic stretch), the step at which the run started (max_steps counts from it) and the
+  /// integrator's own state. A Simulation built from the same model and solver settings and
+  /// restored from it continues bitwise as the saved one would have. Throws CheckpointError if the
+  /// integrator cannot be checkpointed (see Integrator::checkpoint_refusal) or the data do not fit.
+  void save(CheckpointWriter& w) const;
+  void restore(CheckpointReader& r);
+
 private:
   Model& model_;
   SolverSpec solver_;
@@ -102,6 +110,9 @@ private:
   double blowup_squared_ = 0;
   /// 1 for each constrained degree of freedom; fixed for the run, so built once.
   std::vector<std::uint8_t> constrained_;
+  /// Step at which the current run started; a restored run keeps the original one.
+  std::size_t run_origin_ = 0;
+  bool resumed_ = false;
 
   double relative_residual() const;
 };
