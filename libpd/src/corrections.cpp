@@ -278,6 +278,13 @@ double isotropic_energy_moment(const ModelDimension& d, double horizon) {
   }
 }
 
+double uniaxial_stress_energy_moment(const ModelDimension& d, double horizon) {
+  const double nu = 1.0 / (d.dim + 1);
+  const double iso = isotropic_energy_moment(d, horizon);
+  return (1 + nu) * (1 + nu) * uniaxial_energy_moment(d, horizon) -
+         2 * nu * (1 + nu) / d.dim * iso + nu * nu * iso;
+}
+
 const char* to_string(SurfaceCorrection s) {
   switch (s) {
   case SurfaceCorrection::none:
@@ -288,6 +295,8 @@ const char* to_string(SurfaceCorrection s) {
     return "energy";
   case SurfaceCorrection::macek_silling:
     return "macek-silling";
+  case SurfaceCorrection::tensor:
+    return "tensor";
   }
   return "?";
 }
@@ -470,6 +479,137 @@ energy_surface_factors(const ModelSpec& spec, const ParticleSet& particles,
   return g;
 }
 
+namespace {
+
+/// Solve the k × k system a·x = b (k ≤ 3) by Gaussian elimination with partial pivoting; false
+/// when a pivot vanishes.
+bool solve_small(std::array<std::array<double, 3>, 3> a, std::array<double, 3> b, std::size_t k,
+                 std::array<double, 3>& x) {
+  for (std::size_t c = 0; c < k; ++c) {
+    std::size_t p = c;
+    for (std::size_t r = c + 1; r < k; ++r) {
+      if (std::abs(a[r][c]) > std::abs(a[p][c])) {
+        p = r;
+      }
+    }
+    if (!(std::abs(a[p][c]) > 0)) {
+      return false;
+    }
+    std::swap(a[p], a[c]);
+    std::swap(b[p], b[c]);
+    for (std::size_t r = c + 1; r < k; ++r) {
+      const double f = a[r][c] / a[c][c];
+      for (std::size_t q = c; q < k; ++q) {
+        a[r][q] -= f * a[c][q];
+      }
+      b[r] -= f * b[c];
+    }
+  }
+  for (std::size_t c = k; c-- > 0;) {
+    double v = b[c];
+    for (std::size_t q = c + 1; q < k; ++q) {
+      v -= a[c][q] * x[q];
+    }
+    x[c] = v / a[c][c];
+  }
+  return true;
+}
+
+} // namespace
+
+std::vector<std::array<double, 3>>
+tensor_surface_factors(const ModelSpec& spec, const ParticleSet& particles,
+                       const BondFamily& family, const std::vector<double>& volume_factor) {
+  // Half-bond view of the bond energy: the energy ½ c s² |ξ| V_i V_j of bond ij is shared
+  // equally by its ends, and particle i scales its own half by φ_i(n) = n·G_i·n = Σ_d g_d n_d².
+  // The bond then has the factor ½(φ_i(n) + φ_j(n)) (symmetric, so forces stay pairwise
+  // balanced), and particle i's own energy density W_i = ¼ c Σ_j φ_i(n) s² |ξ| V_j f_j depends on
+  // G_i alone: G_i follows from a dim × dim system per particle, no global solve.
+  //
+  // Loads: the uniaxial *stress* along each axis d, ε = ε(e_d⊗e_d − ν(I − e_d⊗e_d)) with the
+  // model's own ν = 1/(dim+1), s = ε((1+ν) n_d² − ν), classical W = ½Eε². Rows d, columns e:
+  //   Σ_j V_j f_j |ξ| ((1+ν) n_d² − ν)² n_e² · g_e = ∫_H ((1+ν) n_d² − ν)² |ξ| dV.
+  // In the bulk of a lattice whose weighted 4th moments are the continuum's (`moment` weights)
+  // g = (1, 1, 1) solves it exactly: with g = 1 the left side only needs Σ w|ξ| n_d⁴,
+  // Σ w|ξ| n_d² and Σ w|ξ|, all matched (the 6th moments in each entry cancel in the row sum).
+  //
+  // Why not the energy method's recipe (block-tension, δ = 3.015λ, `moment` weights; the last
+  // two points measured with a static solve of the same model while developing this):
+  //  * uniaxial strain weights the bonds along the load only (n_d⁴); near a free face the state is
+  //    closer to uniaxial stress, where the lateral bonds shorten, and the surface particles
+  //    calibrated for strain store ~5 % too much energy under uniaxial stress (elongation −4.6 %);
+  //  * its ellipse through the mean of the ends' factors does not store the energy the factors
+  //    were computed for (surface-layer ratios up to 1.06);
+  //  * making each particle's full-bond energy exact instead (a global solve through the mean of
+  //    the ends) drives the factors of complete-horizon particles next to the surface layer below
+  //    1, a soft band that distorts the lateral contraction (−7 %).
+  // Own halves need no global solve, keep the factors near 1 (≥ 0.88 in block-tension) and give
+  // +0.35 % elongation and +0.59 % lateral contraction (block_tension.cpp).
+  const int dim = spec.dimension.dim;
+  const auto ud = static_cast<std::size_t>(dim);
+  const double nu = 1.0 / (dim + 1);
+  const double target = uniaxial_stress_energy_moment(spec.dimension, spec.lattice.horizon());
+  std::vector<std::array<double, 3>> g(particles.size(), {1.0, 1.0, 1.0});
+  for (std::size_t i = 0; i < particles.size(); ++i) {
+    std::array<std::array<double, 3>, 3> m{};
+    std::array<double, 3> extent{0, 0, 0};
+    double total = 0;
+    for (std::size_t k = family.offsets[i]; k < family.offsets[i + 1]; ++k) {
+      const std::size_t j = family.neighbour[k];
+      const Vec3 xi = bond_vector(particles, i, j);
+      const double inv = family.inverse_length[k];
+      const double weight = particles.volume[j] * volume_factor[k] / inv;
+      std::array<double, 3> n2{0, 0, 0};
+      double sum_n2 = 0;
+      for (std::size_t d = 0; d < ud; ++d) {
+        n2[d] = xi[d] * inv * xi[d] * inv;
+        sum_n2 += n2[d];
+      }
+      for (std::size_t d = 0; d < ud; ++d) {
+        const double s = (1 + nu) * n2[d] - nu * sum_n2;
+        for (std::size_t e = 0; e < ud; ++e) {
+          m[d][e] += weight * s * s * n2[e];
+        }
+        extent[d] += weight * n2[d];
+      }
+      total += weight;
+    }
+    if (!(total > 0)) {
+      continue;
+    }
+    // An axis that no bond spans (a body one particle thick along it) has no energy to restore:
+    // its factor stays 1 and its row and column drop out.
+    std::array<std::size_t, 3> axis{};
+    std::size_t k = 0;
+    for (std::size_t d = 0; d < ud; ++d) {
+      if (extent[d] > 1e-9 * total) {
+        axis[k++] = d;
+      }
+    }
+    std::array<std::array<double, 3>, 3> a{};
+    std::array<double, 3> b{}, x{};
+    double sum = 0;
+    for (std::size_t r = 0; r < k; ++r) {
+      for (std::size_t c = 0; c < k; ++c) {
+        a[r][c] = m[axis[r]][axis[c]];
+        sum += a[r][c];
+      }
+      b[r] = target;
+    }
+    bool ok = solve_small(a, b, k, x);
+    for (std::size_t r = 0; r < k && ok; ++r) {
+      ok = std::isfinite(x[r]) && x[r] > 0;
+    }
+    // A stiffness must stay positive; for a family too lopsided for three independent factors
+    // (not met on boxes, see the unit tests) fall back to one factor for all axes that stores
+    // the summed energy of the loads.
+    for (std::size_t r = 0; r < k; ++r) {
+      g[i][axis[r]] = ok ? x[r] : static_cast<double>(k) * target / sum;
+    }
+  }
+  return g;
+}
+
 std::vector<double> isotropic_surface_factors(const ModelSpec& spec, const ParticleSet& particles,
                                               const BondFamily& family,
                                               const std::vector<double>& volume_factor) {
@@ -532,6 +672,22 @@ std::vector<double> bond_correction_factors(const ModelSpec& spec, const Particl
           s += nd * nd;
         }
         factor[k] *= 1.0 / std::sqrt(s);
+      }
+    }
+    break;
+  }
+  case SurfaceCorrection::tensor: {
+    const auto g = tensor_surface_factors(spec, particles, family, factor);
+    for (std::size_t i = 0; i < n; ++i) {
+      for (std::size_t k = family.offsets[i]; k < family.offsets[i + 1]; ++k) {
+        const std::size_t j = family.neighbour[k];
+        const Vec3 xi = bond_vector(particles, i, j);
+        const double inv = family.inverse_length[k];
+        double phi = 0;
+        for (std::size_t d = 0; d < static_cast<std::size_t>(dim); ++d) {
+          phi += 0.5 * (g[i][d] + g[j][d]) * xi[d] * inv * xi[d] * inv;
+        }
+        factor[k] *= phi;
       }
     }
     break;

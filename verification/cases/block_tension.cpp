@@ -8,14 +8,20 @@
 // verification-full) runs every surface × volume correction and a δ/λ sweep at fixed λ and at
 // fixed δ, and reports the same errors; it gates nothing.
 //
-// Where the lateral error comes from (measured, issue 4): at δ = 3.015λ the discrete cubic lattice
-// itself has a Poisson ratio of 0.268–0.278 instead of 1/4 (patch-test, bulk_lattice_elastic_
-// constants: central pair forces give C12 = C44, and the lattice sums make C44/C11 too large).
-// A scalar factor per bond, which every surface correction is, scales C11 and C12 alike in the
-// bulk and cannot change that ratio, so the lateral contraction stays ≥ 7 % too large however
-// well the surface is corrected. It is not the clamp (the same error at x = 0.245 m and 0.495 m)
-// and hardly the probe rows (interior rows y = 0.035/0.065 m give +5.3 %, outer rows +9.0 % with
-// energy + exact), and refining λ at fixed δ/λ keeps the same lattice sums.
+// Where the errors come from (measured):
+//  * the bulk lattice: with uniform, `linear` or `exact` weights the cubic lattice at δ = 3.015λ
+//    has ν = 0.268–0.278 instead of 1/4 (patch-test, bulk_lattice_elastic_constants: central pair
+//    forces give C12 = C44 and the lattice sums make C44/C11 too large). A scalar factor per bond
+//    scales C11 and C12 alike and cannot change that ratio, so with those weights the lateral
+//    contraction stays ≥ 7 % too large whatever the surface correction. `moment` weights
+//    (α + βΣn⁴, corrections.hpp) give the bulk exactly E and ν = 1/4.
+//  * the surface: 84 of the 100 particles of a cross-section are within δ of a face. `energy`
+//    restores each particle's energy under uniaxial *strain*; under the uniaxial stress of this
+//    test that over-stiffens the faces (−4.6 % elongation with `moment`). `tensor` restores the
+//    uniaxial-stress energy of each particle's own bond halves along every axis: +0.35 %
+//    elongation, +0.59 % lateral contraction with `moment`, the scene's default.
+// Neither error is the clamp (the same at x = 0.245 m and 0.495 m) nor the λ refinement at fixed
+// δ/λ (the same lattice sums).
 #include "cases.hpp"
 #include "libpd/corrections.hpp"
 #include "libpd/run.hpp"

@@ -58,6 +58,24 @@ std::vector<std::array<double, 3>> energy_surface_factors(const ModelSpec& spec,
                                                           const BondFamily& family,
                                                           const std::vector<double>& volume_factor);
 
+/// Continuum moment of a full horizon under uniaxial stress along one axis:
+///   ∫_H ((1+ν)n_x² − ν)² |ξ| dV = (1+ν)²·(uniaxial moment) − 2ν(1+ν)/dim·(isotropic moment)
+///                                 + ν²·(isotropic moment),
+/// with ν = 1/(dim+1), the in-plane Poisson ratio of an isotropic central-force model (1/4 in 3D,
+/// 1/3 in 2D for plane stress and plane strain alike; in 1D every bond has n_x² = 1 and ν drops
+/// out). ¼·c·ε²·(this moment) is ½Eε² in 3D and 1D, ½E'ε² in 2D (E' = E plane stress,
+/// E/(1 − ν²) plane strain): πδ⁴/6 in 3D, t·2πδ³/9 in 2D, A·δ² in 1D.
+double uniaxial_stress_energy_moment(const ModelDimension& d, double horizon);
+
+/// `tensor` correction: per particle a diagonal tensor G_i = diag(g_x, g_y, g_z) (unused axes 1)
+/// such that particle i's own halves of its bonds, each scaled by n·G_i·n, store the classical
+/// energy density of a uniaxial stress along every axis (see corrections.cpp). Bond weights
+/// `volume_factor` as in energy_surface_factors.
+std::vector<std::array<double, 3>> tensor_surface_factors(const ModelSpec& spec,
+                                                          const ParticleSet& particles,
+                                                          const BondFamily& family,
+                                                          const std::vector<double>& volume_factor);
+
 /// Per-particle factor of the `macek-silling` correction (see corrections.cpp for what it is and
 /// how sure we are of the source): classical over PD energy density under isotropic expansion.
 std::vector<double> isotropic_surface_factors(const ModelSpec& spec, const ParticleSet& particles,
@@ -67,9 +85,9 @@ std::vector<double> isotropic_surface_factors(const ModelSpec& spec, const Parti
 /// Names as written in scene files.
 const char* to_string(SurfaceCorrection s);
 const char* to_string(VolumeCorrection v);
-inline constexpr std::array<SurfaceCorrection, 4> all_surface_corrections{
+inline constexpr std::array<SurfaceCorrection, 5> all_surface_corrections{
     SurfaceCorrection::none, SurfaceCorrection::volume, SurfaceCorrection::energy,
-    SurfaceCorrection::macek_silling};
+    SurfaceCorrection::macek_silling, SurfaceCorrection::tensor};
 inline constexpr std::array<VolumeCorrection, 4> all_volume_corrections{
     VolumeCorrection::none, VolumeCorrection::linear, VolumeCorrection::exact,
     VolumeCorrection::moment};

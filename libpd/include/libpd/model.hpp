@@ -16,8 +16,8 @@ namespace pd {
 
 inline constexpr double no_limit = std::numeric_limits<double>::infinity();
 
-/// Per-bond modifiers of the bond stiffness, beyond the neighbour volume.
-enum class SurfaceCorrection { none, volume, energy, macek_silling };
+/// Per-bond modifiers of the bond stiffness, beyond the neighbour volume (corrections.hpp).
+enum class SurfaceCorrection { none, volume, energy, macek_silling, tensor };
 /// Quadrature weights of the bonds: partial-volume corrections of neighbour cells cut by the
 /// horizon (`linear`, `exact`), or lattice weights that reproduce the continuum's fourth moments
 /// (`moment`, see corrections.hpp).
