@@ -2,14 +2,17 @@
 # The README's two commands:
 #   bash tools/quickstart.sh report   build everything and run the verification report
 #   bash tools/quickstart.sh test     build everything and run the default test suite
+#   bash tools/quickstart.sh test-sanitizers
+#                                     the same packages, then build-asan/ (AddressSanitizer +
+#                                     UBSan, presets `asan`) and its unit and fuzz tests
 # Both install missing Debian packages first (idempotent: nothing is installed twice), configure
 # with CMake + Ninja into build/ and build. Run as root on Debian 12 (or with sudo available).
 set -euo pipefail
 
 mode=${1:-}
 case "$mode" in
-  report|test) ;;
-  *) echo "usage: $0 report|test" >&2; exit 64 ;;
+  report|test|test-sanitizers) ;;
+  *) echo "usage: $0 report|test|test-sanitizers" >&2; exit 64 ;;
 esac
 cd "$(dirname "$0")/.."
 
@@ -39,6 +42,20 @@ if ((${#missing[@]})); then
   fi
   "${sudo[@]}" apt-get update -q
   DEBIAN_FRONTEND=noninteractive "${sudo[@]}" apt-get install -y -q --no-install-recommends "${missing[@]}"
+fi
+
+if [[ $mode == test-sanitizers ]]; then
+  echo "== configure and build with AddressSanitizer + UBSan (build-asan/)"
+  start=$SECONDS
+  cmake --preset asan
+  cmake --build --preset asan
+  echo "== unit and fuzz tests under the sanitizers (ctest --preset asan)"
+  export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1}
+  export UBSAN_OPTIONS=${UBSAN_OPTIONS:-halt_on_error=1:print_stacktrace=1}
+  status=0
+  ctest --preset asan || status=$?
+  echo "== sanitizer build and tests took $((SECONDS - start)) s"
+  exit $status
 fi
 
 echo "== configure and build (build/)"

@@ -11,6 +11,7 @@
 // Exit codes: 0 success, 1 bad input or usage, 2 a verification gate failed, 3 the run became
 // unstable.
 #include "libpd/force_kernel.hpp"
+#include "libpd/resources.hpp"
 #include "libpd/run.hpp"
 #include "libpd/scene.hpp"
 #include "libpd/stability.hpp"
@@ -113,7 +114,10 @@ int cmd_run(const std::string& scene_path, const std::string& out_dir, int threa
 
 int cmd_info(const std::string& scene_path, bool json) {
   const pd::Scene scene = load_or_explain(scene_path);
-  const pd::ModelSizeEstimate est = pd::estimate_model_size(scene.model);
+  // The estimate the scene parser's memory guard used, shown beside the actual numbers so that
+  // its accuracy can be checked on any scene.
+  const pd::ResourceEstimate est = pd::estimate_resources(scene.model, scene.solver);
+  const auto budget = pd::available_memory();
   const pd::Model model = pd::build_model(scene.model);
   const double dt = pd::stable_time_step(model);
   const double per_particle = 2.0 * static_cast<double>(model.family.bond_count()) /
@@ -125,7 +129,13 @@ int cmd_info(const std::string& scene_path, bool json) {
   j["bonds_per_particle"] = per_particle;
   j["horizon"] = model.horizon();
   j["memory_bytes"] = model.memory_bytes();
-  j["memory_estimate_bytes"] = est.bytes;
+  j["memory_estimate_bytes"] = est.model_bytes;
+  j["estimate_particles"] = est.particles;
+  j["estimate_bonds"] = est.bonds;
+  j["estimate_total_bytes"] = est.bytes;
+  if (budget) {
+    j["memory_available_bytes"] = budget->bytes;
+  }
   j["dt_stable"] = dt;
   j["effects"] = pd::Json::array_of(model.effects.names());
   if (json) {
@@ -133,12 +143,22 @@ int cmd_info(const std::string& scene_path, bool json) {
     return 0;
   }
   fmt::print("scene              {}\n", scene_path);
-  fmt::print("particles          {}\n", model.size());
-  fmt::print("bonds              {}\n", model.family.bond_count());
-  fmt::print("bonds per particle {:.2f} (family size, both directions)\n", per_particle);
+  fmt::print("                   {:>14} {:>14}\n", "actual", "estimate");
+  fmt::print("particles          {:>14} {:>14.0f}\n", model.size(), est.particles);
+  fmt::print("bonds              {:>14} {:>14.0f}\n", model.family.bond_count(), est.bonds);
+  fmt::print("bonds per particle {:>14.2f} {:>14.2f} (family size, both directions; estimate: "
+             "bulk)\n",
+             per_particle, est.bonds_per_particle);
+  fmt::print("model memory       {:>14} {:>14}\n",
+             pd::format_bytes(static_cast<double>(model.memory_bytes())),
+             pd::format_bytes(est.model_bytes));
+  fmt::print("memory guard       {:>14} {:>14} (estimate with integrator and build transients; "
+             "{})\n",
+             "", pd::format_bytes(est.bytes),
+             budget
+                 ? fmt::format("{} available, {}", pd::format_bytes(budget->bytes), budget->source)
+                 : std::string("available memory unknown"));
   fmt::print("horizon            {:.6g} m\n", model.horizon());
-  fmt::print("memory             {:.1f} MiB (estimate before building: {:.1f} MiB)\n",
-             static_cast<double>(model.memory_bytes()) / 1048576.0, est.bytes / 1048576.0);
   fmt::print("stable dt (eq. 31) {:.6g} s\n", dt);
   fmt::print("effects            {}\n", fmt::join(model.effects.names(), ", "));
   return 0;
@@ -341,8 +361,8 @@ int cmd_stability(const std::vector<std::string>& scenes, std::vector<std::strin
         // the measured limit must also respect the conservative eq. 31 bound.
         const double ratio = r.measured / r.sharp_finite;
         if (!(std::abs(ratio - 1.0) <= gate)) {
-          gate_failures.push_back(
-              fmt::format("{} {}: measured / predicted = {:.4f}", name, r.integrator, ratio));
+          gate_failures.push_back(fmt::format("{} {}: measured / predicted = {:.4f}", name,
+                                              r.integrator, ratio));
         }
         if (t.kind != pd::IntegratorKind::arkode && r.measured < r.eq31) {
           gate_failures.push_back(fmt::format("{} {}: measured {:.4e} s below eq. 31 {:.4e} s",

@@ -5,6 +5,8 @@
 // `scene_template()` prints them, so documentation, checks and template cannot drift apart.
 #include "libpd/scene.hpp"
 
+#include "libpd/resources.hpp"
+
 #include <algorithm>
 #include <array>
 #include <cctype>
@@ -23,11 +25,28 @@
 #include <string_view>
 #include <system_error>
 #include <utility>
+#include <yaml-cpp/eventhandler.h>
 #include <yaml-cpp/yaml.h>
 
 namespace pd {
 
 namespace {
+
+/// Messages quote the scene's text (and yaml-cpp quotes the offending character verbatim, e.g.
+/// "unknown escape character: \0"); a NUL, newline or other control byte would cut or garble the
+/// one-line message on a terminal, so it is shown as \xHH.
+std::string printable(const std::string& text) {
+  std::string out;
+  for (const char ch : text) {
+    const auto c = static_cast<unsigned char>(ch);
+    if (c < 0x20 || c == 0x7f) {
+      out += fmt::format("\\x{:02x}", c);
+    } else {
+      out += ch;
+    }
+  }
+  return out;
+}
 
 std::string format_error(const std::string& file, SourceMark mark, const std::string& what,
                          const std::string& hint) {
@@ -35,9 +54,9 @@ std::string format_error(const std::string& file, SourceMark mark, const std::st
   if (mark.line > 0) {
     out += fmt::format(":{}:{}", mark.line, mark.column);
   }
-  out += ": error: " + what;
+  out += ": error: " + printable(what);
   if (!hint.empty()) {
-    out += "\n  hint: " + hint;
+    out += "\n  hint: " + printable(hint);
   }
   return out;
 }
@@ -447,13 +466,13 @@ constexpr Key model_keys[] = {
      .type = Type::choice,
      .doc = "bond stiffness correction near free surfaces",
      .choices = "none|volume|energy|macek-silling|tensor",
-     .fallback = "none"},
+     .fallback = "tensor"},
     {.name = "volume_correction",
      .type = Type::choice,
      .doc = "bond quadrature weights: partial volume of cut cells (linear, exact) or "
             "moment-matched lattice weights (moment)",
      .choices = "none|linear|exact|moment",
-     .fallback = "none"},
+     .fallback = "moment"},
 };
 constexpr Section model_section{"under 'model'", model_keys};
 
@@ -844,6 +863,8 @@ public:
       : file_(std::move(file)), warnings_(warnings) {}
 
   int dim = 3;
+
+  const std::string& file() const { return file_; }
 
   [[noreturn]] void fail(const YAML::Node& at, const std::string& what,
                          const std::string& hint) const {
@@ -1479,6 +1500,77 @@ std::string format_number(double v) {
   return fmt::format("{}", v);
 }
 
+/// Whether a union of boxes holds a lattice point: some box does. Counted per axis in floating
+/// point, so it needs no enumeration and cannot overflow, whatever the box.
+bool holds_lattice_point(const ModelDimension& d, const LatticeSpec& lattice, const Region& r) {
+  return std::any_of(r.boxes.begin(), r.boxes.end(),
+                     [&](const Box& b) { return lattice_points_in_box(d, lattice, b) > 0; });
+}
+
+std::string format_count(double n) {
+  return n < 1e6 ? fmt::format("{:.0f}", n) : fmt::format("{:.2g}", n);
+}
+
+/// Refuse a scene whose model cannot fit in the memory available (or whose particles cannot be
+/// indexed with 32 bits), from the estimate alone: nothing is enumerated or allocated, so a
+/// request for 10^12 particles fails in microseconds instead of being killed by the OOM killer.
+void check_resources(const Reader& r, const Scene& scene, const YAML::Node& spacing) {
+  const ResourceEstimate e = estimate_resources(scene.model, scene.solver);
+  const int dim = scene.model.dimension.dim;
+  const std::string shrink =
+      fmt::format("coarsen 'lattice.spacing' (memory grows as λ^-{}), shrink the bodies or lower "
+                  "'horizon_factor' (bonds grow as m^{}); 'pd info' shows the estimate",
+                  dim, dim);
+  constexpr double max_particles = std::numeric_limits<std::uint32_t>::max();
+  if (!(e.particles <= max_particles)) {
+    r.fail(spacing,
+           fmt::format("this scene has about {} particles; libpd indexes particles with 32 bits "
+                       "(at most {:.3g})",
+                       std::isfinite(e.particles) ? format_count(e.particles) : "infinitely many",
+                       max_particles),
+           shrink);
+  }
+  std::optional<MemoryBudget> budget;
+  try {
+    budget = available_memory();
+  } catch (const std::invalid_argument& ex) {
+    throw SceneError(r.file(), {}, ex.what(),
+                     "unset PD_MEMORY_LIMIT or give it in bytes, e.g. PD_MEMORY_LIMIT=2G");
+  }
+  if (budget && !(e.bytes <= budget->bytes)) {
+    const bool grid = e.grid_bytes > 0.5 * e.bytes;
+    r.fail(spacing,
+           fmt::format("this scene needs about {} ({} particles, {} bonds{}); {} {}",
+                       format_bytes(e.bytes), format_count(e.particles), format_count(e.bonds),
+                       grid ? ", most of it for the neighbour-search grid over the bounding box "
+                              "of the bodies"
+                            : "",
+                       format_bytes(budget->bytes),
+                       budget->source == "PD_MEMORY_LIMIT" ? "are allowed by PD_MEMORY_LIMIT"
+                                                           : "are available"),
+           grid ? "move the bodies closer together (the grid spans their bounding box with cells "
+                  "of one horizon), or " +
+                      shrink
+                : shrink);
+  }
+}
+
+/// Lattice positions are origin + kλ in double precision: far from 0 (in spacings) they lose the
+/// digits that bond lengths need, and lattice indices beyond 2^63 cannot even be formed. 10^9
+/// spacings keep positions exact to 10^-7 λ.
+constexpr double max_spacings_from_zero = 1e9;
+
+void check_coordinate(const Reader& r, const YAML::Node& node, const std::string& what, double x,
+                      double spacing) {
+  if (!(std::abs(x) / spacing <= max_spacings_from_zero)) {
+    r.fail(node,
+           fmt::format("{} has a coordinate {} m, more than 10^9 spacings ({} m each) from 0: "
+                       "lattice positions that far out lose the precision bond lengths need",
+                       what, format_number(x), format_number(spacing)),
+           "move the scene's coordinates closer to 0, or coarsen the spacing");
+  }
+}
+
 Scene read_scene(const YAML::Node& root, Reader& r) {
   Scene scene;
   ModelSpec& model = scene.model;
@@ -1742,12 +1834,15 @@ Scene read_scene(const YAML::Node& root, Reader& r) {
   if (auto s = r.choice(mod, "stretch")) {
     model.effects.stretch = static_cast<StretchKind>(*s);
   }
-  if (auto s = r.choice(mod, "surface_correction")) {
-    model.surface_correction = static_cast<SurfaceCorrection>(*s);
-  }
-  if (auto v = r.choice(mod, "volume_correction")) {
-    model.volume_correction = static_cast<VolumeCorrection>(*v);
-  }
+  // Scene files default to the pair picked from the block-tension measurements (tensor + moment:
+  // +0.35 % elongation, +0.59 % lateral contraction); ModelSpec's own default stays the bare
+  // model (none + none) for code that assembles models directly.
+  const auto surface = r.choice(mod, "surface_correction");
+  model.surface_correction =
+      surface ? static_cast<SurfaceCorrection>(*surface) : SurfaceCorrection::tensor;
+  const auto volume = r.choice(mod, "volume_correction");
+  model.volume_correction =
+      volume ? static_cast<VolumeCorrection>(*volume) : VolumeCorrection::moment;
 
   // Solver.
   const Fields sol = r.section(top, "solver");
@@ -1969,11 +2064,32 @@ Scene read_scene(const YAML::Node& root, Reader& r) {
            "'output.history_every' is set but there are no probes: no history is written");
   }
 
-  // ---- Regions, against the lattice.
+  // ---- Resources: before anything is enumerated or allocated.
+  check_resources(r, scene, lat.find("spacing")->at());
   const ModelDimension& d = model.dimension;
   const int dim = d.dim;
+  for (int a = 0; a < dim; ++a) {
+    if (lat.has("origin")) {
+      check_coordinate(r, lat.find("origin")->at(), "'lattice.origin'", lattice.origin[a],
+                       lattice.spacing);
+    }
+  }
+  for (std::size_t i = 0; i < model.bodies.size(); ++i) {
+    const auto& boxes = model.bodies[i].region.boxes;
+    for (std::size_t k = 0; k < boxes.size(); ++k) {
+      for (int a = 0; a < dim; ++a) {
+        for (double x : {boxes[k].lo[a], boxes[k].hi[a]}) {
+          check_coordinate(r, body_box_nodes[i][k],
+                           fmt::format("a box of body '{}'", model.bodies[i].name), x,
+                           lattice.spacing);
+        }
+      }
+    }
+  }
+
+  // ---- Regions, against the lattice.
   for (const RegionUse& use : must_have_particles) {
-    if (count_lattice_points(d, lattice, use.region) == 0) {
+    if (!holds_lattice_point(d, lattice, use.region)) {
       r.fail(use.node, use.what + fmt::format(" (spacing {} m)", format_number(lattice.spacing)),
              "enlarge the box to at least one spacing in every direction, or refine the spacing");
     }
@@ -1988,7 +2104,7 @@ Scene read_scene(const YAML::Node& root, Reader& r) {
       for (std::size_t k = 0; k < b.region.boxes.size(); ++k) {
         const Region common =
             intersect_with_bodies(Region{{b.region.boxes[k]}}, {a}, dim, lattice.spacing);
-        if (!common.boxes.empty() && count_lattice_points(d, lattice, common) > 0) {
+        if (holds_lattice_point(d, lattice, common)) {
           r.fail(body_box_nodes[i][k],
                  fmt::format("bodies '{}' and '{}' overlap but have different materials ('{}' and "
                              "'{}')",
@@ -2003,7 +2119,7 @@ Scene read_scene(const YAML::Node& root, Reader& r) {
   }
   for (const RegionUse& use : must_touch_bodies) {
     const Region common = intersect_with_bodies(use.region, model.bodies, dim, lattice.spacing);
-    if (common.boxes.empty() || count_lattice_points(d, lattice, common) == 0) {
+    if (!holds_lattice_point(d, lattice, common)) {
       r.fail(use.node, use.what,
              "move or enlarge the box so that it contains particles of a body (particles sit at "
              "lattice points inside the body boxes)");
@@ -2027,6 +2143,62 @@ Scene read_scene(const YAML::Node& root, Reader& r) {
     }
   }
   return scene;
+}
+
+/// Records where the root node of each document starts.
+class DocumentScan : public YAML::EventHandler {
+public:
+  std::vector<YAML::Mark> roots;
+
+  void OnDocumentStart(const YAML::Mark&) override { pending_ = true; }
+  void OnDocumentEnd() override {}
+  void OnNull(const YAML::Mark& m, YAML::anchor_t) override { root(m); }
+  void OnAlias(const YAML::Mark& m, YAML::anchor_t) override { root(m); }
+  void OnScalar(const YAML::Mark& m, const std::string&, YAML::anchor_t,
+                const std::string&) override {
+    root(m);
+  }
+  void OnSequenceStart(const YAML::Mark& m, const std::string&, YAML::anchor_t,
+                       YAML::EmitterStyle::value) override {
+    root(m);
+  }
+  void OnSequenceEnd() override {}
+  void OnMapStart(const YAML::Mark& m, const std::string&, YAML::anchor_t,
+                  YAML::EmitterStyle::value) override {
+    root(m);
+  }
+  void OnMapEnd() override {}
+
+private:
+  bool pending_ = false;
+  void root(const YAML::Mark& m) {
+    if (pending_) {
+      roots.push_back(m);
+      pending_ = false;
+    }
+  }
+};
+
+struct TextPosition {
+  int line = 0; ///< 0: none
+  int column = 0;
+  char c = 0;
+};
+
+/// The first character outside comments, white space and document markers ('---', '...'),
+/// 1-based, if any.
+TextPosition first_content(const std::string& text) {
+  std::istringstream lines(text);
+  std::string l;
+  for (int line = 1; std::getline(lines, l); ++line) {
+    const std::size_t at = l.find_first_not_of(" \t\r");
+    if (at == std::string::npos || l[at] == '#' || l.compare(at, 3, "---") == 0 ||
+        l.compare(at, 3, "...") == 0) {
+      continue;
+    }
+    return {line, static_cast<int>(at) + 1, l[at]};
+  }
+  return {};
 }
 
 std::string malformed_hint(const std::string& msg, const std::string& text, int line) {
@@ -2068,16 +2240,33 @@ Scene parse(const std::string& text, const std::string& name) {
   std::vector<std::string> warnings;
   Reader r(name, warnings);
   try {
-    const std::vector<YAML::Node> documents = YAML::LoadAll(text);
-    if (documents.empty() || documents[0].IsNull()) {
+    // Not YAML::LoadAll: yaml-cpp 0.7 loops forever on some malformed streams (one starting
+    // with ',', jbeder/yaml-cpp#1040, fixed upstream by PR #1319), appending empty documents
+    // until memory runs out. Scan at most two documents with the event parser instead.
+    std::istringstream stream(text);
+    YAML::Parser parser(stream);
+    DocumentScan scan;
+    for (int documents = 0; documents < 2 && parser.HandleNextDocument(scan); ++documents) {
+    }
+    const YAML::Node root = YAML::Load(text);
+    if (root.IsNull()) {
+      const auto [line, column, c] = first_content(text);
+      if (line > 0) {
+        throw SceneError(
+            name, {line, column},
+            fmt::format("malformed YAML: unexpected '{}' where the scene should start", c),
+            "a scene is a map of 'key: value' lines; remove the stray character");
+      }
       throw SceneError(name, {1, 1}, "the scene is empty",
                        "start from the template printed by 'pd run --print-defaults'");
     }
-    if (documents.size() > 1) {
-      r.fail(documents[1], "a scene file holds one YAML document, found a second one",
-             "remove the '---' separator and everything after it, or split the file");
+    if (scan.roots.size() > 1) {
+      const YAML::Mark& m = scan.roots[1];
+      throw SceneError(name, {m.line + 1, m.column + 1},
+                       "a scene file holds one YAML document, found a second one",
+                       "remove the '---' separator and everything after it, or split the file");
     }
-    scene = read_scene(documents[0], r);
+    scene = read_scene(root, r);
   } catch (const SceneError&) {
     throw;
   } catch (const YAML::Exception& e) {

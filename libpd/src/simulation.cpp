@@ -179,8 +179,11 @@ RunResult Simulation::run(const Observer& observer) {
   r.dt = dt_;
   r.dt_stable = dt_stable_;
   r.residual = std::numeric_limits<double>::quiet_NaN();
-  const std::size_t end_steps =
-      solver_.end_time ? static_cast<std::size_t>(std::ceil(*solver_.end_time / dt_ - 1e-9)) : 0;
+  // Clamped: end_time / dt beyond 2^64 (scene fuzzing: end_time 1e300) must not overflow the
+  // cast; max_steps stops such a run.
+  const double end_count = solver_.end_time ? std::ceil(*solver_.end_time / dt_ - 1e-9) : 0.0;
+  const std::size_t end_steps = end_count < 1.8e19 ? static_cast<std::size_t>(end_count)
+                                                   : std::numeric_limits<std::size_t>::max();
   if (!resumed_) {
     run_origin_ = state_.step;
   }
@@ -234,6 +237,16 @@ RunResult Simulation::run(const Observer& observer) {
     r.strain_energy = strain_energy();
     if (solver_.steady.enabled) {
       r.residual = relative_residual();
+    }
+    // Positions can stay finite while the energies overflow (scene fuzzing: a density of 1e-308
+    // kg/m³ under ADR); never report such a run as a success.
+    if (!std::isfinite(r.kinetic_energy) || !std::isfinite(r.strain_energy)) {
+      r.status = RunStatus::unstable;
+      r.message =
+          fmt::format("run produced non-finite energies at step {} (kinetic {}, strain {}): "
+                      "the scene's values overflow double precision; check densities, "
+                      "moduli, loads and solver.dt",
+                      state_.step, r.kinetic_energy, r.strain_energy);
     }
   }
   r.wall_seconds = std::chrono::duration<double>(clock::now() - start).count();
