@@ -50,12 +50,10 @@ const std::vector<Case>& all_cases() {
       {"cantilever-sweep", "accuracy vs time: cantilever over the same knobs",
        run_cantilever_sweep},
       {"plate-3clamped-sweep", "accuracy vs time: plate over the same knobs", run_plate_sweep},
-      {"rc-beam",
-       "Miranda 5.2.1: RC beam to 20 mm mid-span displacement, damage, shear failure (slow)",
+      {"rc-beam", "Miranda 5.2.1: RC beam to 20 mm mid-span displacement, damage, shear failure",
        run_rc_beam},
       {"compression-cube",
-       "Miranda 5.2.2: C60/75 cube between stiff plates, stress-strain peak vs paper and EC2 "
-       "(slow)",
+       "Miranda 5.2.2: C60/75 cube between stiff plates, stress-strain peak vs paper and EC2",
        run_compression_cube},
   };
   return cases;
