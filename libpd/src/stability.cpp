@@ -86,22 +86,20 @@ double evaluate(const std::vector<double>& q, double y) {
   return v;
 }
 
-/// Largest y0 with |R(iy)|² ≤ 1 + excess for all y ∈ [0, y0] (scan, then bisection).
-double interval_below(const std::vector<double>& q, double excess) {
-  if (excess == 0) {
-    for (double c : q) {
-      if (c > 0) {
-        return 0; // |R(iy)| > 1 right from y = 0
-      }
-      if (c < 0) {
-        break;
-      }
+/// Largest y0 with |R(iy)|² ≤ 1 for all y ∈ [0, y0] (scan, then bisection), for q = |R(iy)|² − 1.
+double interval_below(const std::vector<double>& q) {
+  for (double c : q) {
+    if (c > 0) {
+      return 0; // |R(iy)| > 1 right from y = 0
+    }
+    if (c < 0) {
+      break;
     }
   }
   const double h = 1e-3;
   double lo = 0, y = h;
   for (; y < 20; y += h) {
-    if (evaluate(q, y) > excess) {
+    if (evaluate(q, y) > 0) {
       break;
     }
     lo = y;
@@ -112,7 +110,7 @@ double interval_below(const std::vector<double>& q, double excess) {
   double hi = y;
   for (int it = 0; it < 60; ++it) {
     const double mid = 0.5 * (lo + hi);
-    (evaluate(q, mid) > excess ? hi : lo) = mid;
+    (evaluate(q, mid) > 0 ? hi : lo) = mid;
   }
   return lo;
 }
@@ -120,7 +118,7 @@ double interval_below(const std::vector<double>& q, double excess) {
 } // namespace
 
 double imaginary_stability_interval(const ButcherTableau& table) {
-  return interval_below(modulus_excess(stability_polynomial(table)), 0.0);
+  return interval_below(modulus_excess(stability_polynomial(table)));
 }
 
 namespace {
