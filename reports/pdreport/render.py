@@ -237,7 +237,10 @@ class Page:
                 "(fem_reference/reference); analytical = Timoshenko (Euler–Bernoulli in brackets) for "
                 "the beams, Kirchhoff for the plate, the modal series / σ/E for the bar and the block. "
                 "Miranda's column is the agreement the paper reports between its PD and FE models "
-                "(clamped beam 3 %, cantilever 1 %, plate 4 %); ours is in <i>error vs FE</i>.</p>")
+                "(clamped beam 3 %, cantilever 1 %, plate 4 %); ours is in <i>error vs FE</i>. "
+                "For the structures, <i>budget</i> splits PD/FE into the factor the cross-section's "
+                "own stiffness predicts and what the supports, load and ends add "
+                "(verification/cases/STRUCTURES.md).</p>")
         fails = [n for n, r in verify.items() if ok(r) and not r["result"].get("passed")]
         failtxt = (f"<p class=\"fail\">Gates failing: {esc(', '.join(f.split(':')[1] for f in fails))}</p>"
                    if fails else "<p class=\"pass\">All gates that ran passed.</p>")
@@ -305,6 +308,13 @@ class Page:
             for k, v in err.items():
                 if k.startswith("line_"):
                     efe_l.append(f"<small>{esc(k.removeprefix('line_').replace('_max_over_max_fe', ''))} line max: {pct(v)}</small>")
+            budget = d.get("error_budget", {})
+            first = next((b for b in budget.values() if isinstance(b, dict)), None)
+            if first:
+                sec = d.get("section_stiffness", {})
+                efe_l.append(f"<small>budget: section ×{fnum(first.get('section_factor'), 4)} "
+                             f"(bending {fnum(sec.get('bending'), 3)}, shear {fnum(sec.get('shear'), 3)}), "
+                             f"supports/load/ends ×{fnum(first.get('remaining_factor'), 4)}</small>")
             paper = pct(PAPER_LEVEL.get(base))
             return [f"<b>{esc(case)}</b>", quantity, num_td("<br>".join(pd_l)), num_td("<br>".join(fe_l)),
                     num_td("<br>".join(an_l)), num_td("<br>".join(efe_l)), num_td("<br>".join(ean_l)),

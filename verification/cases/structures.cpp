@@ -18,6 +18,7 @@
 #include "libpd/corrections.hpp"
 #include "libpd/run.hpp"
 #include "libpd/scene.hpp"
+#include "section_stiffness.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -67,6 +68,10 @@ struct StructureCase {
   std::vector<double> sweep_horizon_factor;
   std::vector<std::string> sweep_stretch;
   std::vector<double> sweep_force_tolerance;
+  /// Section-stiffness error budget (section_stiffness.hpp): axes of the main body.
+  int section_span = 0;
+  int section_depth = 2;
+  bool section_plate = false;
 };
 
 Vec3 read_vec3(const YAML::Node& n) {
@@ -123,6 +128,11 @@ StructureCase load_case(const std::filesystem::path& file) {
                          axis_of(l["along"].as<std::string>()), read_vec3(l["through"])});
     }
     c.gate = read_map(root["gate"]);
+    if (const auto sec = root["section"]) {
+      c.section_span = axis_of(sec["span"].as<std::string>());
+      c.section_depth = axis_of(sec["depth"].as<std::string>());
+      c.section_plate = sec["plate"].as<bool>(false);
+    }
     if (const auto fast = root["fast"]) {
       c.fast_spacing = fast["spacing"].as<double>();
       c.fast_stored = read_map(fast["stored"]);
@@ -340,6 +350,24 @@ Json run_once(const Scene& scene, const StructureCase& c, const Context& ctx,
   return lines;
 }
 
+/// The section-stiffness error budget of a scene's main body.
+SectionStiffness section_of(const Scene& scene, const StructureCase& c) {
+  return section_stiffness(scene.model, scene.model.bodies.front(), c.section_span, c.section_depth,
+                           c.section_plate);
+}
+
+Json section_json(const SectionStiffness& s) {
+  Json j;
+  j["bending"] = s.bending;
+  j["shear"] = s.shear;
+  j["membrane"] = s.membrane;
+  j["section_particles"] = s.section_particles;
+  j["meaning"] = "PD / continuum stiffness of the infinitely long section under uniform "
+                 "curvature, shear and axial strain, transverse displacements relaxed "
+                 "(verification/cases/section_stiffness.hpp); supports, load and ends excluded";
+  return j;
+}
+
 YAML::Node load_fe_summary(const std::string& name) {
   const auto path = std::filesystem::path(PD_FEM_REFERENCE_DIR) / (name + ".json");
   try {
@@ -411,6 +439,36 @@ Json run_structure(const Context& ctx, const std::string& case_name, bool fast) 
     out["error"]["line_" + name + "_max_over_max_fe"] = e;
   }
   out["lines"] = lines;
+  const SectionStiffness section = section_of(scene, c);
+  out["section_stiffness"] = section_json(section);
+  // Error budget: the deflection factor the section's stiffness alone predicts, its bending and
+  // shear parts weighted as theory splits the deflection (Euler–Bernoulli + Timoshenko's shear term
+  // for a beam; Kirchhoff + the rest of the FE value for the plate), and what the measurement
+  // leaves beyond it: the supports, the load and the ends.
+  const YAML::Node theory = fe["theory"];
+  std::map<std::string, double> section_factor;
+  for (const auto& q : c.quantities) {
+    const double fe_value = fe["quantities"][q.fe_key]["extrapolated"].as<double>();
+    double total = fe_value;
+    double bending = fe_value;
+    if (theory["euler_bernoulli"]) {
+      total = theory["timoshenko"].as<double>();
+      bending = theory["euler_bernoulli"].as<double>();
+    } else if (theory["quantities"] && theory["quantities"][q.fe_key]) {
+      bending = theory["quantities"][q.fe_key]["kirchhoff"].as<double>();
+    }
+    section_factor[q.name] =
+        (bending / section.bending + (total - bending) / section.shear) / total;
+    const double measured = values[q.name] / fe_value;
+    Json& b = out["error_budget"][q.name];
+    b["measured_factor"] = measured;
+    b["section_factor"] = section_factor[q.name];
+    b["remaining_factor"] = measured / section_factor[q.name];
+  }
+  out["error_budget"]["meaning"] =
+      "deflection PD/FE = section_factor × remaining_factor; section_factor from "
+      "section_stiffness with the bending and shear parts of the deflection weighted as theory "
+      "splits it; remaining_factor: supports (fixed particle blocks), load and ends";
   out["wall_seconds_run"] = run.result.wall_seconds;
   out["steps"] = run.result.steps;
   out["bond_updates"] =
@@ -457,6 +515,16 @@ Json run_structure(const Context& ctx, const std::string& case_name, bool fast) 
                (fast ? c.fast_gate : c.gate).count(q.name)
                    ? fmt::format("{:.1f} %", 100 * (fast ? c.fast_gate : c.gate).at(q.name))
                    : std::string("none"));
+  }
+  fmt::print("   section stiffness PD/continuum: bending {:.4f}, shear {:.4f}, membrane {:.4f}\n",
+             section.bending, section.shear, section.membrane);
+  for (const auto& q : c.quantities) {
+    const double measured =
+        values[q.name] / fe["quantities"][q.fe_key]["extrapolated"].as<double>();
+    fmt::print(
+        "   error budget of {}: the section predicts x{:.4f}, measured x{:.4f}: x{:.4f} from "
+        "supports, load and ends\n",
+        q.name, section_factor[q.name], measured, measured / section_factor[q.name]);
   }
   fmt::print("   {} particles, {} bonds, {} steps, {:.1f} s, status {}\n", run.particles, run.bonds,
              run.result.steps, run.result.wall_seconds, to_string(run.result.status));
@@ -574,6 +642,7 @@ Json run_structure_sweep(const Context& ctx, const std::string& case_name) {
         static_cast<double>(run.bonds) * static_cast<double>(run.result.force_evaluations);
     row["particles"] = run.particles;
     row["bonds"] = run.bonds;
+    row["section_stiffness"] = section_json(section_of(v.scene, c));
     if (v.knob == "spacing" || v.knob == "baseline") {
       spacing_error.emplace_back(v.scene.model.lattice.spacing,
                                  relative_error(values[first_quantity], first_fe));
