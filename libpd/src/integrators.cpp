@@ -83,9 +83,19 @@ void apply_constraints(const Model& model, const LoadRamp& ramp, double t, doubl
                        double* velocity) {
   const double factor = ramp.factor(t);
   const double rate = ramp.rate(t);
+  const auto& x = model.particles.position;
   for (const Constraint& c : model.constraints) {
     const std::size_t dof = 3 * c.particle + c.component;
-    position[dof] = model.particles.position[c.particle][c.component] + factor * c.value;
+    if (c.mirror_of != Constraint::no_mirror) { // sources are free particles, already updated
+      const std::size_t src = 3 * c.mirror_of + c.component;
+      position[dof] = x[c.particle][c.component] +
+                      c.mirror_sign * (position[src] - x[c.mirror_of][c.component]);
+      if (velocity != nullptr) {
+        velocity[dof] = c.mirror_sign * velocity[src];
+      }
+      continue;
+    }
+    position[dof] = x[c.particle][c.component] + factor * c.value;
     if (velocity != nullptr) {
       velocity[dof] = rate * c.value;
     }

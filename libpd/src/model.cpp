@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <map>
 #include <set>
 #include <stdexcept>
 
@@ -12,6 +14,48 @@ namespace pd {
 namespace {
 
 /// Tolerance for "a particle lies in a region": far below λ, far above round-off.
+std::string point_text(const Vec3& p) {
+  char buffer[96];
+  std::snprintf(buffer, sizeof buffer, "(%.6g, %.6g, %.6g)", p[0], p[1], p[2]);
+  return buffer;
+}
+
+/// Mirror constraints of a support (SupportSpec::mirror): each member takes the displacement of
+/// the particle at its reflection across every mirror plane, negated once per plane. The image is
+/// looked up on a grid of λ/4, so it must be a lattice point (regular lattices only).
+void add_mirror_constraints(const ParticleSet& particles, double spacing, std::size_t support,
+                            const SupportSpec& sup, const std::vector<std::uint32_t>& members,
+                            std::vector<Constraint>& constraints) {
+  const double cell = 0.25 * spacing;
+  const auto key = [cell](const Vec3& p) {
+    return std::array<long long, 3>{std::llround(p[0] / cell), std::llround(p[1] / cell),
+                                    std::llround(p[2] / cell)};
+  };
+  std::map<std::array<long long, 3>, std::uint32_t> at;
+  for (std::size_t i = 0; i < particles.size(); ++i) {
+    at.emplace(key(particles.position[i]), static_cast<std::uint32_t>(i));
+  }
+  for (std::uint32_t i : members) {
+    Vec3 image = particles.position[i];
+    double sign = 1.0;
+    for (int a = 0; a < 3; ++a) {
+      if (sup.mirror[a]) {
+        image[a] = 2.0 * sup.mirror_at[a] - image[a];
+        sign = -sign;
+      }
+    }
+    const auto found = at.find(key(image));
+    if (found == at.end() || found->second == i) {
+      throw SupportError(support, "support '" + sup.name + "': no particle at the mirror image " +
+                                      point_text(image) + " of the particle at " +
+                                      point_text(particles.position[i]));
+    }
+    for (std::uint8_t c = 0; c < 3; ++c) {
+      constraints.push_back({i, c, 0.0, found->second, sign});
+    }
+  }
+}
+
 double region_tolerance(const ModelSpec& spec) {
   return 1e-6 * spec.lattice.spacing;
 }
@@ -54,6 +98,64 @@ std::vector<std::uint32_t> particles_in(const ParticleSet& ps, const Region& reg
 }
 
 } // namespace
+
+std::vector<Constraint> support_constraints(const ModelSpec& spec, const ParticleSet& particles) {
+  const double tol = region_tolerance(spec);
+  std::vector<Constraint> constraints;
+  for (std::size_t s = 0; s < spec.supports.size(); ++s) {
+    const SupportSpec& sup = spec.supports[s];
+    const auto members = particles_in(particles, sup.region, spec.dimension.dim, tol);
+    if (members.empty()) {
+      throw SupportError(s, "support '" + sup.name + "' holds no particle");
+    }
+    if (sup.mirrors()) {
+      add_mirror_constraints(particles, spec.lattice.spacing, s, sup, members, constraints);
+      continue;
+    }
+    for (std::uint32_t i : members) {
+      for (std::uint8_t c = 0; c < 3; ++c) {
+        if (sup.fixed[c] || sup.prescribed[c]) {
+          constraints.push_back({i, c, sup.prescribed[c] ? sup.displacement[c] : 0.0});
+        }
+      }
+    }
+  }
+  // Later supports override earlier ones on the same component.
+  std::stable_sort(
+      constraints.begin(), constraints.end(), [](const Constraint& a, const Constraint& b) {
+        return a.particle != b.particle ? a.particle < b.particle : a.component < b.component;
+      });
+  std::vector<Constraint> merged;
+  for (const Constraint& c : constraints) {
+    if (!merged.empty() && merged.back().particle == c.particle &&
+        merged.back().component == c.component) {
+      merged.back() = c;
+    } else {
+      merged.push_back(c);
+    }
+  }
+  // A mirror source must move freely: apply_constraints reads it before the constraints act.
+  std::vector<std::uint8_t> held(3 * particles.size(), 0);
+  for (const Constraint& c : merged) {
+    held[3 * c.particle + c.component] = 1;
+  }
+  for (std::size_t s = 0; s < spec.supports.size(); ++s) {
+    const SupportSpec& sup = spec.supports[s];
+    if (!sup.mirrors()) {
+      continue;
+    }
+    for (const Constraint& c : merged) {
+      if (c.mirror_of != Constraint::no_mirror && held[3 * c.mirror_of + c.component] &&
+          sup.region.contains(particles.position[c.particle], spec.dimension.dim, tol)) {
+        throw SupportError(
+            s, "support '" + sup.name + "': the mirror image " +
+                   point_text(particles.position[c.mirror_of]) + " of the particle at " +
+                   point_text(particles.position[c.particle]) + " is itself supported");
+      }
+    }
+  }
+  return merged;
+}
 
 std::size_t Model::memory_bytes() const {
   const std::size_t n = size();
@@ -163,35 +265,8 @@ Model build_model(const ModelSpec& spec) {
     m.state.plastic_stretch.assign(m.family.directed_bond_count(), 0.0);
   }
 
-  // Supports: later supports override earlier ones on the same component.
+  m.constraints = support_constraints(spec, m.particles);
   const double tol = region_tolerance(spec);
-  std::vector<Constraint> constraints;
-  for (std::size_t s = 0; s < spec.supports.size(); ++s) {
-    const SupportSpec& sup = spec.supports[s];
-    const auto members = particles_in(m.particles, sup.region, dim, tol);
-    if (members.empty()) {
-      throw std::runtime_error("support '" + sup.name + "' holds no particle");
-    }
-    for (std::uint32_t i : members) {
-      for (std::uint8_t c = 0; c < 3; ++c) {
-        if (sup.fixed[c] || sup.prescribed[c]) {
-          constraints.push_back({i, c, sup.prescribed[c] ? sup.displacement[c] : 0.0});
-        }
-      }
-    }
-  }
-  std::stable_sort(
-      constraints.begin(), constraints.end(), [](const Constraint& a, const Constraint& b) {
-        return a.particle != b.particle ? a.particle < b.particle : a.component < b.component;
-      });
-  for (const Constraint& c : constraints) {
-    if (!m.constraints.empty() && m.constraints.back().particle == c.particle &&
-        m.constraints.back().component == c.component) {
-      m.constraints.back() = c;
-    } else {
-      m.constraints.push_back(c);
-    }
-  }
 
   // Loads become force densities [N/m³]; a resultant is shared in proportion to particle volume.
   if (!spec.loads.empty()) {

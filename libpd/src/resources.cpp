@@ -220,9 +220,9 @@ ResourceEstimate estimate_resources(const ModelSpec& spec, const SolverSpec& sol
   // Constraints: at most one per supported component of each particle in a support box.
   double constrained = 0;
   for (const SupportSpec& s : spec.supports) {
-    int components = 0;
+    int components = s.mirrors() ? 3 : 0; // a mirror support moves all three with the body
     for (int c = 0; c < 3; ++c) {
-      components += s.fixed[c] || s.prescribed[c] ? 1 : 0;
+      components += !s.mirrors() && (s.fixed[c] || s.prescribed[c]) ? 1 : 0;
     }
     double members = 0;
     for (const Box& box : s.region.boxes) {

@@ -60,6 +60,8 @@ std::uint64_t model_hash(const Model& m) {
     h.add_value(c.particle);
     h.add_value(c.component);
     h.add_value(c.value);
+    h.add_value(c.mirror_of);
+    h.add_value(c.mirror_sign);
   }
   h.add_vector(m.external_force_density);
   return h.value();

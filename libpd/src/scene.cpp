@@ -411,6 +411,15 @@ constexpr Key support_keys[] = {
      .unit = "m",
      .example = "{x: 0.001}",
      .show = Show::commented},
+    {.name = "mirror",
+     .type = Type::component_values,
+     .doc = "instead of fixed: a clamped face at these planes (x = value, ...). The support's "
+            "particles take the body's displacement mirrored across every plane, negated once "
+            "per plane, so the displacement vanishes on the face with the strain continuous "
+            "across it; fixed particles put the clamp about one spacing behind the face",
+     .unit = "m",
+     .example = "{x: 0}",
+     .show = Show::commented},
 };
 constexpr Section support_section{"in a support", support_keys};
 
@@ -1724,6 +1733,7 @@ Scene read_scene(const YAML::Node& root, Reader& r) {
 
   // Supports.
   std::vector<RegionUse> must_touch_bodies;
+  std::vector<YAML::Node> support_nodes; ///< where a support's own errors point
   {
     std::map<std::string, YAML::Node> names;
     const auto list = r.items(top, "supports");
@@ -1754,11 +1764,28 @@ Scene read_scene(const YAML::Node& root, Reader& r) {
         s.prescribed[c] = true;
         s.displacement[c] = *displacement[c];
       }
-      if (std::none_of(s.fixed.begin(), s.fixed.end(), [](bool b) { return b; }) &&
-          std::none_of(s.prescribed.begin(), s.prescribed.end(), [](bool b) { return b; })) {
+      std::array<YAML::Node, 3> mirror_nodes;
+      const auto mirror = r.component_values(f, "mirror", mirror_nodes);
+      support_nodes.push_back(f.has("mirror") ? f.find("mirror")->at() : f.anchor);
+      for (int c = 0; c < 3; ++c) {
+        if (mirror[c]) {
+          s.mirror[c] = true;
+          s.mirror_at[c] = *mirror[c];
+        }
+      }
+      const bool holds =
+          std::any_of(s.fixed.begin(), s.fixed.end(), [](bool b) { return b; }) ||
+          std::any_of(s.prescribed.begin(), s.prescribed.end(), [](bool b) { return b; });
+      if (s.mirrors() && holds) {
+        r.fail(f.find("mirror")->at(),
+               fmt::format("support '{}' both mirrors and fixes or displaces", s.name),
+               "a mirror support moves all three components with the body: remove 'fixed' and "
+               "'displacement', or 'mirror'");
+      }
+      if (!holds && !s.mirrors()) {
         r.fail(f.anchor,
                fmt::format("support '{}' neither fixes nor displaces any component", s.name),
-               "add 'fixed: [x, ...]' or 'displacement: {x: value}'");
+               "add 'fixed: [x, ...]', 'displacement: {x: value}' or 'mirror: {x: value}'");
       }
       must_touch_bodies.push_back(
           {s.region, region.node,
@@ -2140,6 +2167,19 @@ Scene read_scene(const YAML::Node& root, Reader& r) {
                          probe_point_names[i], fmt::format("{:.3g}", nearest),
                          format_number(lattice.spacing)),
              "put the point inside a body or on its surface");
+    }
+  }
+  // Mirror supports need each image to be a free particle: only the lattice can tell (the memory
+  // guard has passed, so generating the particles is affordable).
+  if (std::any_of(model.supports.begin(), model.supports.end(),
+                  [](const SupportSpec& s) { return s.mirrors(); })) {
+    try {
+      support_constraints(model, generate_lattice(model.dimension, lattice, model.bodies));
+    } catch (const SupportError& e) {
+      r.fail(support_nodes.at(e.support), e.what(),
+             "a mirror support needs a regular lattice (no position_jitter), a plane on a cell "
+             "face, and free body particles beyond the plane at least as far as the support "
+             "reaches");
     }
   }
   return scene;

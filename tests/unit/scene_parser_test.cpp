@@ -1133,3 +1133,28 @@ TEST(SceneParser, ArkodeSectionWithAnotherIntegratorWarns) {
 }
 
 } // namespace
+
+// ---- Mirror supports --------------------------------------------------------------------------
+
+TEST(SceneParser, MirrorSupportParses) {
+  const pd::Scene s =
+      pd::parse_scene(yaml(minimal) + "supports:\n  - name: face\n    box: [[0], [0.3]]\n"
+                                      "    mirror: {x: 0.3}\n",
+                      "s.yaml");
+  ASSERT_EQ(s.model.supports.size(), 1u);
+  EXPECT_TRUE(s.model.supports[0].mirror[0]);
+  EXPECT_DOUBLE_EQ(s.model.supports[0].mirror_at[0], 0.3);
+  EXPECT_FALSE(s.model.supports[0].fixed[0]);
+}
+
+TEST(SceneParser, MirrorTogetherWithFixed) {
+  EXPECT_TRUE(fails_at(yaml(minimal) + "supports:\n  - name: s\n    box: [[0], [0.2]]\n"
+                                       "    fixed: [x]\n    mirror: {x: 0.2}\n",
+                       18, 13, "support 's' both mirrors and fixes or displaces"));
+}
+
+TEST(SceneParser, MirrorImageOutsideTheBody) {
+  EXPECT_TRUE(fails_at(yaml(minimal) + "supports:\n  - name: s\n    box: [[0], [0.3]]\n"
+                                       "    mirror: {x: 0.95}\n",
+                       17, 13, "support 's': no particle at the mirror image (1.85, 0, 0)"));
+}

@@ -563,4 +563,55 @@ TEST(Simulation, ModelWithoutBondsIsRejected) {
   EXPECT_THROW(pd::Simulation(model, pd::SolverSpec{}), std::runtime_error);
 }
 
+// A clamp made of fixed particles leaves the bonds into it elastic over their whole length: the
+// bar behaves as if held about one spacing behind the face. A mirror clamp (odd reflection of the
+// body's displacement) makes u = εx an exact equilibrium up to the face, so the far-field
+// displacement extrapolates to zero on the face itself.
+TEST(Simulation, MirrorClampHoldsTheBarAtTheFace) {
+  const int n = 40;
+  const auto clamp_position = [&](bool mirror) {
+    pd::ModelSpec spec = bar(n);
+    spec.bodies.front().region.boxes.front().lo[0] = -4 * lambda; // a block of 4 ≥ δ/λ particles
+    pd::SupportSpec clamp;
+    clamp.name = "clamp";
+    clamp.region = pd::Region{{pd::Box{{-4 * lambda, 0, 0}, {0, 0, 0}}}};
+    if (mirror) {
+      clamp.mirror[0] = true;
+      clamp.mirror_at = {0, 0, 0};
+    } else {
+      clamp.fixed[0] = true;
+    }
+    spec.supports = {clamp};
+    pd::LoadSpec load;
+    load.name = "pull";
+    load.load.region = particle_region(n - 1);
+    load.load.value = {20.0, 0, 0};
+    spec.loads = {load};
+    pd::Model model = pd::build_model(spec);
+    pd::SolverSpec solver;
+    solver.integrator = pd::IntegratorKind::damped_euler;
+    solver.damping = rho * std::numbers::pi * std::sqrt(E / rho) / (n * lambda);
+    solver.ramp_time = 1e-3;
+    solver.steady.enabled = true;
+    solver.steady.force_tolerance = 1e-9;
+    solver.max_steps = 400'000;
+    pd::Simulation sim(model, solver);
+    const pd::RunResult r = sim.run();
+    EXPECT_EQ(r.status, pd::RunStatus::converged) << r.message;
+    // Particles are numbered from the clamp block's first; bulk pair in the middle of the bar.
+    const std::size_t a = 4 + n / 2 - 5;
+    const std::size_t b = 4 + n / 2 + 5;
+    const double xa = model.particles.position[a][0];
+    const double xb = model.particles.position[b][0];
+    const double slope = (sim.displacement(b, 0) - sim.displacement(a, 0)) / (xb - xa);
+    return xa - sim.displacement(a, 0) / slope; // where the far field has zero displacement
+  };
+  const double mirrored = clamp_position(true);
+  const double fixed = clamp_position(false);
+  RecordProperty("mirror_clamp_position_over_spacing", std::to_string(mirrored / lambda));
+  RecordProperty("fixed_clamp_position_over_spacing", std::to_string(fixed / lambda));
+  EXPECT_NEAR(mirrored, 0.0, 0.01 * lambda);
+  EXPECT_LT(fixed, -0.5 * lambda);
+}
+
 } // namespace

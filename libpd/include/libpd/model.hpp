@@ -9,6 +9,7 @@
 
 #include <cstdint>
 #include <limits>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -44,11 +45,15 @@ struct BondState {
 };
 
 /// A prescribed displacement of one component of one particle. With a load ramp the value is
-/// reached gradually, u = F(t)·value (Miranda §3.2 step 14).
+/// reached gradually, u = F(t)·value (Miranda §3.2 step 14). A mirror constraint instead copies
+/// the displacement of another particle's same component, times ±1 (SupportSpec::mirror).
 struct Constraint {
+  static constexpr std::uint32_t no_mirror = std::numeric_limits<std::uint32_t>::max();
   std::uint32_t particle = 0;
   std::uint8_t component = 0;
   double value = 0;
+  std::uint32_t mirror_of = no_mirror; ///< source particle of a mirror constraint
+  double mirror_sign = 0;              ///< u = mirror_sign · u(source)
 };
 
 struct BoxRegionLoad {
@@ -64,6 +69,14 @@ struct SupportSpec {
   std::array<bool, 3> fixed{false, false, false};
   std::array<bool, 3> prescribed{false, false, false};
   Vec3 displacement{0, 0, 0};
+  /// Clamped face without a rigid block: each particle of the support takes the displacement of
+  /// its mirror image across the planes x_a = mirror_at[a] (every a with mirror[a]), negated once
+  /// per plane. The displacement then vanishes on the face with the strain continuous across it,
+  /// where a block of fixed particles leaves the bonds into it elastic over their whole length
+  /// and so puts the clamp about one spacing behind the face.
+  std::array<bool, 3> mirror{false, false, false};
+  Vec3 mirror_at{0, 0, 0};
+  bool mirrors() const { return mirror[0] || mirror[1] || mirror[2]; }
 };
 
 struct LoadSpec {
@@ -109,6 +122,18 @@ struct ModelSizeEstimate {
   double bytes = 0;
 };
 ModelSizeEstimate estimate_model_size(const ModelSpec& spec);
+
+/// A support that cannot act as specified; `support` is its index in ModelSpec::supports.
+struct SupportError : std::runtime_error {
+  SupportError(std::size_t index, const std::string& what)
+      : std::runtime_error(what), support(index) {}
+  std::size_t support;
+};
+
+/// The constraints of spec.supports on `particles`, sorted by particle and component (a later
+/// support overrides an earlier one on the same component). Throws SupportError for a support
+/// that holds no particle or whose mirror images are not free lattice particles.
+std::vector<Constraint> support_constraints(const ModelSpec& spec, const ParticleSet& particles);
 
 /// Build particles, families, bond parameters, supports and loads.
 /// Throws std::runtime_error for inconsistent specs that the scene checker did not catch.
