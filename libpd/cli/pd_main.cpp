@@ -7,15 +7,18 @@
 //   pd verify [CASE...] [-o DIR] [--list]     verification cases with their gates
 //   pd stability SCENE... [--integrator X]    measured vs predicted stable time steps
 //   pd compare dynamic|quasistatic [-o F]     integrator cost/accuracy rows (JSON lines)
+//   pd section SCENE [--depth z] [--plate]    PD/continuum stiffness of a beam or plate section
 //
 // Exit codes: 0 success, 1 bad input or usage, 2 a verification gate failed, 3 the run became
 // unstable.
+#include "libpd/corrections.hpp"
 #include "libpd/force_kernel.hpp"
 #include "libpd/resources.hpp"
 #include "libpd/run.hpp"
 #include "libpd/scene.hpp"
 #include "libpd/stability.hpp"
 #include "libpd/stable_time_step.hpp"
+#include "section_stiffness.hpp"
 #include "verification.hpp"
 
 #include <CLI/CLI.hpp>
@@ -108,6 +111,59 @@ int cmd_run(const std::string& scene_path, const std::string& out_dir, int threa
   if (out.result.status == pd::RunStatus::unstable) {
     fmt::print(stderr, "error: {}\n", out.result.message);
     return 3;
+  }
+  return 0;
+}
+
+int axis_index(const std::string& name) {
+  return name == "x" ? 0 : name == "y" ? 1 : 2;
+}
+
+/// Section stiffness of the scene's first body (section_stiffness.hpp), for the scene's own
+/// corrections or for every pair: the a-priori part of a bending structure's error budget.
+int cmd_section(const std::string& scene_path, const std::string& span, const std::string& depth,
+                bool plate, bool all_pairs, bool json) {
+  const pd::Scene scene = pd::load_scene(scene_path);
+  if (span == depth) {
+    fmt::print(stderr, "error: --span and --depth must be different axes\n");
+    return 1;
+  }
+  std::vector<std::pair<pd::SurfaceCorrection, pd::VolumeCorrection>> pairs;
+  if (all_pairs) {
+    for (auto sc : pd::all_surface_corrections) {
+      for (auto vc : pd::all_volume_corrections) {
+        pairs.emplace_back(sc, vc);
+      }
+    }
+  } else {
+    pairs.emplace_back(scene.model.surface_correction, scene.model.volume_correction);
+  }
+  if (!json) {
+    fmt::print("{}: section of body '{}', span {}, depth {}{}; PD / continuum stiffness\n",
+               scene_path, scene.model.bodies.front().name, span, depth,
+               plate ? ", plate (long in the third axis too)" : "");
+    fmt::print("{:<30} {:>9} {:>9} {:>9}\n", "surface + volume correction", "bending", "shear",
+               "axial");
+  }
+  for (const auto& [sc, vc] : pairs) {
+    pd::ModelSpec spec = scene.model;
+    spec.surface_correction = sc;
+    spec.volume_correction = vc;
+    const auto s = pd::verification::section_stiffness(spec, spec.bodies.front(), axis_index(span),
+                                                       axis_index(depth), plate);
+    const std::string name = fmt::format("{} + {}", pd::to_string(sc), pd::to_string(vc));
+    if (json) {
+      pd::Json j;
+      j["surface_correction"] = pd::to_string(sc);
+      j["volume_correction"] = pd::to_string(vc);
+      j["bending"] = s.bending;
+      j["shear"] = s.shear;
+      j["membrane"] = s.membrane;
+      j["section_particles"] = s.section_particles;
+      fmt::print("{}", j.dump(0)); // dump ends the line
+    } else {
+      fmt::print("{:<30} {:>9.4f} {:>9.4f} {:>9.4f}\n", name, s.bending, s.shear, s.membrane);
+    }
   }
   return 0;
 }
@@ -361,8 +417,8 @@ int cmd_stability(const std::vector<std::string>& scenes, std::vector<std::strin
         // the measured limit must also respect the conservative eq. 31 bound.
         const double ratio = r.measured / r.sharp_finite;
         if (!(std::abs(ratio - 1.0) <= gate)) {
-          gate_failures.push_back(fmt::format("{} {}: measured / predicted = {:.4f}", name,
-                                              r.integrator, ratio));
+          gate_failures.push_back(
+              fmt::format("{} {}: measured / predicted = {:.4f}", name, r.integrator, ratio));
         }
         if (t.kind != pd::IntegratorKind::arkode && r.measured < r.eq31) {
           gate_failures.push_back(fmt::format("{} {}: measured {:.4e} s below eq. 31 {:.4e} s",
@@ -702,6 +758,24 @@ int main(int argc, char** argv) {
   compare->add_flag("--quick", compare_quick, "fewer time steps and a coarser reference");
   compare->add_option("--threads", threads, "OpenMP threads (default: all)");
 
+  std::string section_span = "x", section_depth = "z";
+  bool section_plate = false, section_all = false;
+  auto* section = app.add_subcommand(
+      "section", "PD / continuum bending, shear and axial stiffness of the cross-section of the "
+                 "scene's first body, infinitely long (the a-priori part of a structure's error "
+                 "budget, verification/cases/STRUCTURES.md)");
+  section->add_option("scene", scene, "scene file (YAML)")->required();
+  section->add_option("--span", section_span, "axis along which the body is long")
+      ->check(CLI::IsMember({"x", "y", "z"}))
+      ->capture_default_str();
+  section->add_option("--depth", section_depth, "bending (load) direction")
+      ->check(CLI::IsMember({"x", "y", "z"}))
+      ->capture_default_str();
+  section->add_flag("--plate", section_plate, "the third axis is long too (a plate)");
+  section->add_flag("--all-pairs", section_all,
+                    "every surface/volume correction pair instead of the scene's");
+  section->add_flag("--json", json, "JSON lines");
+
   CLI11_PARSE(app, argc, argv);
   try {
     if (*run) {
@@ -735,6 +809,9 @@ int main(int argc, char** argv) {
     }
     if (*compare) {
       return cmd_compare(compare_what, compare_out, scenes_dir, compare_quick, threads);
+    }
+    if (*section) {
+      return cmd_section(scene, section_span, section_depth, section_plate, section_all, json);
     }
   } catch (const pd::SceneError& e) {
     fmt::print(stderr, "{}\n", e.what());
