@@ -115,10 +115,6 @@ int cmd_run(const std::string& scene_path, const std::string& out_dir, int threa
   return 0;
 }
 
-int axis_index(const std::string& name) {
-  return name == "x" ? 0 : name == "y" ? 1 : 2;
-}
-
 /// Section stiffness of the scene's first body (section_stiffness.hpp), for the scene's own
 /// corrections or for every pair: the a-priori part of a bending structure's error budget.
 int cmd_section(const std::string& scene_path, const std::string& span, const std::string& depth,
@@ -149,8 +145,9 @@ int cmd_section(const std::string& scene_path, const std::string& span, const st
     pd::ModelSpec spec = scene.model;
     spec.surface_correction = sc;
     spec.volume_correction = vc;
-    const auto s = pd::verification::section_stiffness(spec, spec.bodies.front(), axis_index(span),
-                                                       axis_index(depth), plate);
+    const auto s = pd::verification::section_stiffness(spec, spec.bodies.front(),
+                                                       pd::verification::axis_of(span),
+                                                       pd::verification::axis_of(depth), plate);
     const std::string name = fmt::format("{} + {}", pd::to_string(sc), pd::to_string(vc));
     if (json) {
       pd::Json j;

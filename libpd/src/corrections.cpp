@@ -629,6 +629,28 @@ std::vector<double> isotropic_surface_factors(const ModelSpec& spec, const Parti
   return g;
 }
 
+namespace {
+
+/// Multiply each directed bond's factor by per_bond(ξ, 1/|ξ|, ḡ), ḡ_d = (g_i,d + g_j,d)/2 the
+/// mean of its ends' per-axis factors (d < dim): the shared step of the axis-wise corrections.
+template <class PerBond>
+void scale_by_axis_factors(const ParticleSet& particles, const BondFamily& family, int dim,
+                           const std::vector<std::array<double, 3>>& g, std::vector<double>& factor,
+                           PerBond per_bond) {
+  for (std::size_t i = 0; i < particles.size(); ++i) {
+    for (std::size_t k = family.offsets[i]; k < family.offsets[i + 1]; ++k) {
+      const std::size_t j = family.neighbour[k];
+      std::array<double, 3> mean{1, 1, 1};
+      for (std::size_t d = 0; d < static_cast<std::size_t>(dim); ++d) {
+        mean[d] = 0.5 * (g[i][d] + g[j][d]);
+      }
+      factor[k] *= per_bond(bond_vector(particles, i, j), family.inverse_length[k], mean);
+    }
+  }
+}
+
+} // namespace
+
 std::vector<double> bond_correction_factors(const ModelSpec& spec, const ParticleSet& particles,
                                             const BondFamily& family) {
   const std::size_t n = particles.size();
@@ -661,35 +683,27 @@ std::vector<double> bond_correction_factors(const ModelSpec& spec, const Particl
     //   g_ij = ( Σ_d (n_d / g_d)² )^(−1/2)
     // which gives g_d for a bond along axis d and is symmetric in i and j.
     const auto g = energy_surface_factors(spec, particles, family, factor);
-    for (std::size_t i = 0; i < n; ++i) {
-      for (std::size_t k = family.offsets[i]; k < family.offsets[i + 1]; ++k) {
-        const std::size_t j = family.neighbour[k];
-        const Vec3 xi = bond_vector(particles, i, j);
-        const double inv = family.inverse_length[k];
-        double s = 0;
-        for (std::size_t d = 0; d < static_cast<std::size_t>(dim); ++d) {
-          const double nd = xi[d] * inv / (0.5 * (g[i][d] + g[j][d]));
-          s += nd * nd;
-        }
-        factor[k] *= 1.0 / std::sqrt(s);
-      }
-    }
+    scale_by_axis_factors(particles, family, dim, g, factor,
+                          [dim](const Vec3& xi, double inv, const std::array<double, 3>& mean) {
+                            double s = 0;
+                            for (std::size_t d = 0; d < static_cast<std::size_t>(dim); ++d) {
+                              const double nd = xi[d] * inv / mean[d];
+                              s += nd * nd;
+                            }
+                            return 1.0 / std::sqrt(s);
+                          });
     break;
   }
   case SurfaceCorrection::tensor: {
     const auto g = tensor_surface_factors(spec, particles, family, factor);
-    for (std::size_t i = 0; i < n; ++i) {
-      for (std::size_t k = family.offsets[i]; k < family.offsets[i + 1]; ++k) {
-        const std::size_t j = family.neighbour[k];
-        const Vec3 xi = bond_vector(particles, i, j);
-        const double inv = family.inverse_length[k];
-        double phi = 0;
-        for (std::size_t d = 0; d < static_cast<std::size_t>(dim); ++d) {
-          phi += 0.5 * (g[i][d] + g[j][d]) * xi[d] * inv * xi[d] * inv;
-        }
-        factor[k] *= phi;
-      }
-    }
+    scale_by_axis_factors(particles, family, dim, g, factor,
+                          [dim](const Vec3& xi, double inv, const std::array<double, 3>& mean) {
+                            double phi = 0; // n·G·n with the mean diagonal tensor
+                            for (std::size_t d = 0; d < static_cast<std::size_t>(dim); ++d) {
+                              phi += mean[d] * xi[d] * inv * xi[d] * inv;
+                            }
+                            return phi;
+                          });
     break;
   }
   case SurfaceCorrection::macek_silling: {

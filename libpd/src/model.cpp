@@ -23,9 +23,15 @@ std::string point_text(const Vec3& p) {
 /// Mirror constraints of a support (SupportSpec::mirror): each member takes the displacement of
 /// the particle at its reflection across every mirror plane, negated once per plane. The image is
 /// looked up on a grid of λ/4, so it must be a lattice point (regular lattices only).
+/// A constraint with the index of the support that set it (for error messages).
+struct OwnedConstraint {
+  Constraint constraint;
+  std::size_t support = 0;
+};
+
 void add_mirror_constraints(const ParticleSet& particles, double spacing, std::size_t support,
                             const SupportSpec& sup, const std::vector<std::uint32_t>& members,
-                            std::vector<Constraint>& constraints) {
+                            std::vector<OwnedConstraint>& constraints) {
   const double cell = 0.25 * spacing;
   const auto key = [cell](const Vec3& p) {
     return std::array<long long, 3>{std::llround(p[0] / cell), std::llround(p[1] / cell),
@@ -51,7 +57,7 @@ void add_mirror_constraints(const ParticleSet& particles, double spacing, std::s
                                       point_text(particles.position[i]));
     }
     for (std::uint8_t c = 0; c < 3; ++c) {
-      constraints.push_back({i, c, 0.0, found->second, sign});
+      constraints.push_back({{i, c, 0.0, found->second, sign}, support});
     }
   }
 }
@@ -101,7 +107,7 @@ std::vector<std::uint32_t> particles_in(const ParticleSet& ps, const Region& reg
 
 std::vector<Constraint> support_constraints(const ModelSpec& spec, const ParticleSet& particles) {
   const double tol = region_tolerance(spec);
-  std::vector<Constraint> constraints;
+  std::vector<OwnedConstraint> constraints;
   for (std::size_t s = 0; s < spec.supports.size(); ++s) {
     const SupportSpec& sup = spec.supports[s];
     const auto members = particles_in(particles, sup.region, spec.dimension.dim, tol);
@@ -115,46 +121,45 @@ std::vector<Constraint> support_constraints(const ModelSpec& spec, const Particl
     for (std::uint32_t i : members) {
       for (std::uint8_t c = 0; c < 3; ++c) {
         if (sup.fixed[c] || sup.prescribed[c]) {
-          constraints.push_back({i, c, sup.prescribed[c] ? sup.displacement[c] : 0.0});
+          constraints.push_back({{i, c, sup.prescribed[c] ? sup.displacement[c] : 0.0}, s});
         }
       }
     }
   }
   // Later supports override earlier ones on the same component.
-  std::stable_sort(
-      constraints.begin(), constraints.end(), [](const Constraint& a, const Constraint& b) {
-        return a.particle != b.particle ? a.particle < b.particle : a.component < b.component;
-      });
-  std::vector<Constraint> merged;
-  for (const Constraint& c : constraints) {
-    if (!merged.empty() && merged.back().particle == c.particle &&
-        merged.back().component == c.component) {
-      merged.back() = c;
+  std::stable_sort(constraints.begin(), constraints.end(),
+                   [](const OwnedConstraint& a, const OwnedConstraint& b) {
+                     return a.constraint.particle != b.constraint.particle
+                                ? a.constraint.particle < b.constraint.particle
+                                : a.constraint.component < b.constraint.component;
+                   });
+  std::vector<OwnedConstraint> merged;
+  for (const OwnedConstraint& o : constraints) {
+    if (!merged.empty() && merged.back().constraint.particle == o.constraint.particle &&
+        merged.back().constraint.component == o.constraint.component) {
+      merged.back() = o;
     } else {
-      merged.push_back(c);
+      merged.push_back(o);
     }
   }
   // A mirror source must move freely: apply_constraints reads it before the constraints act.
   std::vector<std::uint8_t> held(3 * particles.size(), 0);
-  for (const Constraint& c : merged) {
-    held[3 * c.particle + c.component] = 1;
+  for (const OwnedConstraint& o : merged) {
+    held[3 * o.constraint.particle + o.constraint.component] = 1;
   }
-  for (std::size_t s = 0; s < spec.supports.size(); ++s) {
-    const SupportSpec& sup = spec.supports[s];
-    if (!sup.mirrors()) {
-      continue;
+  std::vector<Constraint> out;
+  out.reserve(merged.size());
+  for (const OwnedConstraint& o : merged) {
+    const Constraint& c = o.constraint;
+    if (c.mirror_of != Constraint::no_mirror && held[3 * c.mirror_of + c.component]) {
+      throw SupportError(o.support,
+                         "support '" + spec.supports[o.support].name + "': the mirror image " +
+                             point_text(particles.position[c.mirror_of]) + " of the particle at " +
+                             point_text(particles.position[c.particle]) + " is itself supported");
     }
-    for (const Constraint& c : merged) {
-      if (c.mirror_of != Constraint::no_mirror && held[3 * c.mirror_of + c.component] &&
-          sup.region.contains(particles.position[c.particle], spec.dimension.dim, tol)) {
-        throw SupportError(
-            s, "support '" + sup.name + "': the mirror image " +
-                   point_text(particles.position[c.mirror_of]) + " of the particle at " +
-                   point_text(particles.position[c.particle]) + " is itself supported");
-      }
-    }
+    out.push_back(c);
   }
-  return merged;
+  return out;
 }
 
 std::size_t Model::memory_bytes() const {

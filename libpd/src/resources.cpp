@@ -220,9 +220,12 @@ ResourceEstimate estimate_resources(const ModelSpec& spec, const SolverSpec& sol
   // Constraints: at most one per supported component of each particle in a support box.
   double constrained = 0;
   for (const SupportSpec& s : spec.supports) {
-    int components = s.mirrors() ? 3 : 0; // a mirror support moves all three with the body
+    int components = 0;
     for (int c = 0; c < 3; ++c) {
-      components += !s.mirrors() && (s.fixed[c] || s.prescribed[c]) ? 1 : 0;
+      components += s.fixed[c] || s.prescribed[c] ? 1 : 0;
+    }
+    if (s.mirrors()) {
+      components = 3; // a mirror support moves all three with the body
     }
     double members = 0;
     for (const Box& box : s.region.boxes) {

@@ -1158,3 +1158,10 @@ TEST(SceneParser, MirrorImageOutsideTheBody) {
                                        "    mirror: {x: 0.95}\n",
                        17, 13, "support 's': no particle at the mirror image (1.85, 0, 0)"));
 }
+
+TEST(SceneParser, MirrorImageHeldByAnotherSupport) {
+  EXPECT_TRUE(fails_at(yaml(minimal) + "supports:\n  - name: m\n    box: [[0], [0.3]]\n"
+                                       "    mirror: {x: 0.3}\n"
+                                       "  - name: f\n    box: [[0.3], [0.5]]\n    fixed: [x]\n",
+                       17, 13, "is itself supported"));
+}

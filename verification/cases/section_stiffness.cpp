@@ -135,6 +135,19 @@ double relaxed_energy(const Prism& prism, Mode mode, int span, int depth, int wi
 
 } // namespace
 
+int axis_of(const std::string& name) {
+  if (name == "x") {
+    return 0;
+  }
+  if (name == "y") {
+    return 1;
+  }
+  if (name == "z") {
+    return 2;
+  }
+  throw std::runtime_error("axis must be x, y or z, got '" + name + "'");
+}
+
 SectionStiffness section_stiffness(const ModelSpec& spec, const BodySpec& body, int span, int depth,
                                    bool plate) {
   if (spec.dimension.dim != 3) {

@@ -24,6 +24,7 @@
 #include "libpd/model.hpp"
 
 #include <cstddef>
+#include <string>
 
 namespace pd::verification {
 
@@ -33,6 +34,9 @@ struct SectionStiffness {
   double membrane = 0; ///< PD / continuum axial stiffness
   std::size_t section_particles = 0;
 };
+
+/// Axis index of "x", "y" or "z"; throws std::runtime_error for anything else.
+int axis_of(const std::string& name);
 
 /// Section stiffness of `body` (its first box) in the scene model `spec`. `span` is the axis along
 /// which the structure is long, `depth` the bending (load) direction; `plate` makes the third

@@ -82,19 +82,6 @@ Vec3 read_vec3(const YAML::Node& n) {
   return v;
 }
 
-int axis_of(const std::string& s) {
-  if (s == "x") {
-    return 0;
-  }
-  if (s == "y") {
-    return 1;
-  }
-  if (s == "z") {
-    return 2;
-  }
-  throw std::runtime_error("axis must be x, y or z, got '" + s + "'");
-}
-
 std::map<std::string, double> read_map(const YAML::Node& n) {
   std::map<std::string, double> m;
   if (n) {
@@ -446,7 +433,7 @@ Json run_structure(const Context& ctx, const std::string& case_name, bool fast) 
   // for a beam; Kirchhoff + the rest of the FE value for the plate), and what the measurement
   // leaves beyond it: the supports, the load and the ends.
   const YAML::Node theory = fe["theory"];
-  std::map<std::string, double> section_factor;
+  std::map<std::string, double> section_factor, measured_factor;
   for (const auto& q : c.quantities) {
     const double fe_value = fe["quantities"][q.fe_key]["extrapolated"].as<double>();
     double total = fe_value;
@@ -459,11 +446,11 @@ Json run_structure(const Context& ctx, const std::string& case_name, bool fast) 
     }
     section_factor[q.name] =
         (bending / section.bending + (total - bending) / section.shear) / total;
-    const double measured = values[q.name] / fe_value;
+    measured_factor[q.name] = values[q.name] / fe_value;
     Json& b = out["error_budget"][q.name];
-    b["measured_factor"] = measured;
+    b["measured_factor"] = measured_factor[q.name];
     b["section_factor"] = section_factor[q.name];
-    b["remaining_factor"] = measured / section_factor[q.name];
+    b["remaining_factor"] = measured_factor[q.name] / section_factor[q.name];
   }
   out["error_budget"]["meaning"] =
       "deflection PD/FE = section_factor × remaining_factor; section_factor from "
@@ -519,12 +506,11 @@ Json run_structure(const Context& ctx, const std::string& case_name, bool fast) 
   fmt::print("   section stiffness PD/continuum: bending {:.4f}, shear {:.4f}, membrane {:.4f}\n",
              section.bending, section.shear, section.membrane);
   for (const auto& q : c.quantities) {
-    const double measured =
-        values[q.name] / fe["quantities"][q.fe_key]["extrapolated"].as<double>();
     fmt::print(
         "   error budget of {}: the section predicts x{:.4f}, measured x{:.4f}: x{:.4f} from "
         "supports, load and ends\n",
-        q.name, section_factor[q.name], measured, measured / section_factor[q.name]);
+        q.name, section_factor[q.name], measured_factor[q.name],
+        measured_factor[q.name] / section_factor[q.name]);
   }
   fmt::print("   {} particles, {} bonds, {} steps, {:.1f} s, status {}\n", run.particles, run.bonds,
              run.result.steps, run.result.wall_seconds, to_string(run.result.status));
