@@ -6,8 +6,8 @@
 //  * Dispatched/<effects>: the kernel picked by make_force_evaluator for that effect set.
 // Elastic-exact through the dispatcher should match the hand-written loop within noise; the
 // other rows show what each effect costs when it is switched on.
-#include "libpd/force_kernel.hpp"
-#include "libpd/model.hpp"
+#include "libpd/kernel/force_kernel.hpp"
+#include "libpd/discretisation/model.hpp"
 
 #include <benchmark/benchmark.h>
 #include <cmath>

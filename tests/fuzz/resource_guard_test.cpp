@@ -2,9 +2,9 @@
 // refused at 'lattice.spacing' before anything is enumerated, PD_MEMORY_LIMIT overrides the
 // machine's memory, and the estimate never falls below what a built model really holds.
 // Also the CLI's side of it: `pd` exits non-zero with FILE:LINE:COL on stderr.
-#include "libpd/lattice.hpp"
-#include "libpd/resources.hpp"
-#include "libpd/scene.hpp"
+#include "libpd/discretisation/lattice.hpp"
+#include "libpd/io/resources.hpp"
+#include "libpd/io/scene.hpp"
 
 #include <cstdlib>
 #include <filesystem>

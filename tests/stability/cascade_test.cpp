@@ -13,7 +13,7 @@
 //    integrator's error), and it cannot exceed the same sum at the largest stretch a bond can
 //    reach in one step past s0. E > E0 + W (energy from nowhere) is the signature of an
 //    instability.
-#include "libpd/stability.hpp"
+#include "libpd/time/stability.hpp"
 #include "stability_support.hpp"
 
 #include <cmath>

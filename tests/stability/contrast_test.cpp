@@ -10,8 +10,8 @@
 //  * the undamped run stays finite and its energy behaves as velocity Verlet's must with no
 //    loads and no supports (stab::check_verlet_energy): never above E(0), dips bounded by
 //    (ω_max Δt)²/4 and shrinking as Δt² when the step is halved.
-#include "libpd/stability.hpp"
-#include "libpd/stable_time_step.hpp"
+#include "libpd/time/stability.hpp"
+#include "libpd/kernel/stable_time_step.hpp"
 #include "stability_support.hpp"
 
 #include <cmath>
@@ -60,7 +60,7 @@ void run_contrast(const ContrastCase& cc) {
   opt.steps = 500;
   opt.relative_tolerance = 0.02;
   const pd::StabilityResult st =
-      pd::measure_stability(probe, pd::StabilityTarget{pd::IntegratorKind::verlet}, opt);
+      pd::measure_stability(probe.model, probe.solver, pd::StabilityTarget{pd::IntegratorKind::verlet}, opt);
   pd::Scene probe_soft = probe;
   probe_soft.model.materials.at(1).stiffness_factor = 1.0;
   const double probe_eq31_soft = pd::stable_time_step(pd::build_model(probe_soft.model));

@@ -8,8 +8,8 @@
 //  * the undamped run stays finite and its energy behaves as velocity Verlet's must
 //    (stab::check_verlet_energy: never above E(0), dip within (ω_max Δt)²/4, shrinking as Δt²).
 // The irregular set with damage is exercised by the cascade (cascade_test.cpp).
-#include "libpd/stability.hpp"
-#include "libpd/stable_time_step.hpp"
+#include "libpd/time/stability.hpp"
+#include "libpd/kernel/stable_time_step.hpp"
 #include "stability_support.hpp"
 
 #include <fmt/format.h>
@@ -46,7 +46,7 @@ void run_irregular(const IrregularCase& ic) {
   opt.steps = 500;
   opt.relative_tolerance = 0.02;
   const pd::StabilityResult st =
-      pd::measure_stability(probe, pd::StabilityTarget{pd::IntegratorKind::verlet}, opt);
+      pd::measure_stability(probe.model, probe.solver, pd::StabilityTarget{pd::IntegratorKind::verlet}, opt);
   EXPECT_GE(st.measured, st.eq31) << "eq. 31 is not a safe bound on the irregular set";
 
   const stab::EnergyCheck ec = stab::check_verlet_energy(scene, ic.steps);

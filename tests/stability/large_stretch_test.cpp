@@ -23,8 +23,8 @@
 // of the sharp limit at rest, so the fast measure loses stability with dt: auto beyond
 // (3(1 + s)² − 1)/2 = 1.17²/0.8², i.e. s ≈ 0.33. Those cases run at dt: auto / sqrt(tangent
 // factor), and a separate case checks that dt: auto at s = 0.5 is stopped cleanly (README.md).
-#include "libpd/stability.hpp"
-#include "libpd/stable_time_step.hpp"
+#include "libpd/time/stability.hpp"
+#include "libpd/kernel/stable_time_step.hpp"
 #include "stability_support.hpp"
 
 #include <algorithm>

@@ -4,7 +4,7 @@
 // amplitude O((ωΔt)²) and does not accumulate. Measured: the largest |E − E0|/E0 over the run
 // (gate ≤ 1e-3, the bound) and the secular drift, the change of the mean energy between
 // the first and the last tenth of the run (which for a symplectic scheme is round-off only).
-#include "libpd/stable_time_step.hpp"
+#include "libpd/kernel/stable_time_step.hpp"
 #include "stability_support.hpp"
 
 #include <cmath>

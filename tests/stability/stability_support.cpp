@@ -1,7 +1,7 @@
 #include "stability_support.hpp"
 
-#include "libpd/force_kernel.hpp"
-#include "libpd/stability.hpp"
+#include "libpd/kernel/force_kernel.hpp"
+#include "libpd/time/stability.hpp"
 
 #include <algorithm>
 #include <chrono>

@@ -2,9 +2,9 @@
 // energy balance, and the checks every case ends with (finite fields, damage in [0, 1]).
 #pragma once
 
-#include "libpd/model.hpp"
-#include "libpd/scene.hpp"
-#include "libpd/simulation.hpp"
+#include "libpd/discretisation/model.hpp"
+#include "libpd/io/scene.hpp"
+#include "libpd/time/simulation.hpp"
 
 #include <cstddef>
 #include <string>

@@ -10,7 +10,7 @@
 //    non-finite value in any file written.
 // The limit itself is compared with the sharp prediction 2/ω_max (Lanczos estimate of the
 // largest frequency) and with eq. 31 (which must be below it).
-#include "libpd/stability.hpp"
+#include "libpd/time/stability.hpp"
 #include "stability_support.hpp"
 
 #include <cmath>
@@ -97,7 +97,7 @@ void check_limit(const std::string& file, std::size_t steps) {
   opt.steps = 1000;
   opt.relative_tolerance = 0.005;
   const pd::StabilityResult st =
-      pd::measure_stability(scene, pd::StabilityTarget{pd::IntegratorKind::verlet}, opt);
+      pd::measure_stability(scene.model, scene.solver, pd::StabilityTarget{pd::IntegratorKind::verlet}, opt);
   ASSERT_GT(st.measured, 0.0);
   EXPECT_GE(st.measured, st.eq31) << "eq. 31 above the measured limit";
   // Central differences are stable up to ω_max Δt = 2; a bounded run cannot tell much beyond it.

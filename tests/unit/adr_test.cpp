@@ -2,12 +2,12 @@
 // central differences with Δt = 1 stable (ω_max of Λ⁻¹K ≤ 2, checked with the Lanczos estimate of
 // libpd/stability.hpp), and ADR reaches the same static answer as damped Euler under the same
 // steady-state criterion. AdrSlow.* runs the clamped-beam acceptance case (≈ 20 s, label it slow).
-#include "libpd/force_kernel.hpp"
-#include "libpd/integrators.hpp"
-#include "libpd/run.hpp"
-#include "libpd/scene.hpp"
-#include "libpd/simulation.hpp"
-#include "libpd/stability.hpp"
+#include "libpd/kernel/force_kernel.hpp"
+#include "libpd/time/integrator.hpp"
+#include "libpd/app/run.hpp"
+#include "libpd/io/scene.hpp"
+#include "libpd/time/simulation.hpp"
+#include "libpd/time/stability.hpp"
 
 #include <cmath>
 #include <gtest/gtest.h>

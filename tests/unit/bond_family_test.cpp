@@ -1,7 +1,7 @@
 // Neighbour search: the cell-list families against an O(N²) search, CSR invariants, reverse
 // bonds and the treatment of bonds exactly on the horizon.
-#include "libpd/bond_family.hpp"
-#include "libpd/lattice.hpp"
+#include "libpd/discretisation/bond_family.hpp"
+#include "libpd/discretisation/lattice.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -1,8 +1,8 @@
 // Stretch measures and bond laws: values, the relation between the measures (Miranda eq. 26),
 // energy/force consistency, the common linearisation (Appendix A) and micro-plasticity
 // (eqs. 14–16).
-#include "libpd/bond_laws.hpp"
-#include "libpd/stretch.hpp"
+#include "libpd/physics/bond_laws.hpp"
+#include "libpd/physics/stretch.hpp"
 
 #include <array>
 #include <cmath>

@@ -1,8 +1,8 @@
 // Surface and volume correction factors on small configurations, each against a value computed
 // independently here (closed forms, lattice sums written out, midpoint-grid volumes).
-#include "libpd/corrections.hpp"
-#include "libpd/model.hpp"
-#include "libpd/scene.hpp"
+#include "libpd/discretisation/corrections.hpp"
+#include "libpd/discretisation/model.hpp"
+#include "libpd/io/scene.hpp"
 
 #include <array>
 #include <cmath>

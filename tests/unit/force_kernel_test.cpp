@@ -1,7 +1,7 @@
 // The force kernel against a naive reference written from the papers (Miranda et al. 2019 eqs.
 // 6–17 and 27), for every combination of stretch measure × plasticity × damage × field storage.
-#include "libpd/force_kernel.hpp"
-#include "libpd/model.hpp"
+#include "libpd/kernel/force_kernel.hpp"
+#include "libpd/discretisation/model.hpp"
 
 #include <gtest/gtest.h>
 

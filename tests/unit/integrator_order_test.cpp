@@ -8,10 +8,10 @@
 // (c_s = 1, not FSAL) drops from order 4 to 3 and Heun–Euler keeps order 2 but its error grows;
 // the Issue311 tests expect exactly that, so they fail if the defect disappears (new SUNDIALS) or
 // changes — then the work-around and these notes need revisiting.
-#include "libpd/force_kernel.hpp"
-#include "libpd/integrators.hpp"
-#include "libpd/model.hpp"
-#include "libpd/stability.hpp"
+#include "libpd/kernel/force_kernel.hpp"
+#include "libpd/time/integrator.hpp"
+#include "libpd/discretisation/model.hpp"
+#include "libpd/time/stability.hpp"
 
 #include <cmath>
 #include <cstdio>

@@ -1,6 +1,6 @@
 // Lattice generation: point counts and positions for both conventions, unions of boxes, volumes,
 // ordering and jitter.
-#include "libpd/lattice.hpp"
+#include "libpd/discretisation/lattice.hpp"
 
 #include <algorithm>
 #include <cmath>

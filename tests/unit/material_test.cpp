@@ -1,6 +1,6 @@
 // Micromodulus and critical stretch against independent derivations: the closed forms of Miranda
 // eqs. 8 and 11, and quadratures of the PD energy density and fracture energy done here.
-#include "libpd/material.hpp"
+#include "libpd/physics/material.hpp"
 
 #include <array>
 #include <cmath>

@@ -1,6 +1,6 @@
 // Output: JSON text (checked by parsing it back), atomic file replacement and VTU files.
-#include "libpd/output.hpp"
-#include "libpd/stable_time_step.hpp"
+#include "libpd/io/output.hpp"
+#include "libpd/kernel/stable_time_step.hpp"
 
 #include <algorithm>
 #include <cctype>

@@ -1,6 +1,6 @@
 // Scene parser: every class of bad input is reported as a SceneError at the offending node, valid
 // scenes fill every field, and the generated template is itself a valid scene.
-#include "libpd/scene.hpp"
+#include "libpd/io/scene.hpp"
 
 #include <filesystem>
 #include <fstream>

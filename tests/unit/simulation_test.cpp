@@ -1,10 +1,10 @@
 // Runs: energy conservation of velocity Verlet, quasi-static convergence of damped Euler against
 // the static solution of the linear spring chain, instability detection, reproducibility, load
 // ramps and prescribed displacements.
-#include "libpd/force_kernel.hpp"
-#include "libpd/integrators.hpp"
-#include "libpd/simulation.hpp"
-#include "libpd/stable_time_step.hpp"
+#include "libpd/kernel/force_kernel.hpp"
+#include "libpd/time/integrator.hpp"
+#include "libpd/time/simulation.hpp"
+#include "libpd/kernel/stable_time_step.hpp"
 
 #include <gtest/gtest.h>
 

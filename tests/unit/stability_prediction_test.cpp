@@ -1,9 +1,9 @@
 // The sharp prediction of what `pd stability` measures (libpd/stability.hpp): a bounded run of N
 // steps is unstable once its energy grows by more than `growth`, and each mode's energy grows by
 // |a(ωΔt)|^{2N}. Checked here against closed forms derived independently of the library code.
-#include "libpd/integrators.hpp"
-#include "libpd/model.hpp"
-#include "libpd/stability.hpp"
+#include "libpd/time/integrator.hpp"
+#include "libpd/discretisation/model.hpp"
+#include "libpd/time/stability.hpp"
 
 #include <cmath>
 #include <gtest/gtest.h>

@@ -1,6 +1,6 @@
 // Stable time step (Miranda eq. 31) evaluated by hand on small chains.
-#include "libpd/model.hpp"
-#include "libpd/stable_time_step.hpp"
+#include "libpd/discretisation/model.hpp"
+#include "libpd/kernel/stable_time_step.hpp"
 
 #include <algorithm>
 #include <cmath>

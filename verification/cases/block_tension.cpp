@@ -23,9 +23,9 @@
 // Neither error is the clamp (the same at x = 0.245 m and 0.495 m) nor the λ refinement at fixed
 // δ/λ (the same lattice sums).
 #include "cases.hpp"
-#include "libpd/corrections.hpp"
-#include "libpd/run.hpp"
-#include "libpd/scene.hpp"
+#include "libpd/discretisation/corrections.hpp"
+#include "libpd/app/run.hpp"
+#include "libpd/io/scene.hpp"
 
 #include <array>
 #include <chrono>

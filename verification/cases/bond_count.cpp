@@ -7,8 +7,8 @@
 // Also: bonds per particle in an infinite lattice for δ/λ = 1…8 beside Miranda Table 1, whose
 // values come from the approximation N/M ≈ (2/3)π(δ/λ)³ − 1/2 (eq. 37).
 #include "cases.hpp"
-#include "libpd/bond_family.hpp"
-#include "libpd/scene.hpp"
+#include "libpd/discretisation/bond_family.hpp"
+#include "libpd/io/scene.hpp"
 
 #include <cmath>
 #include <fmt/format.h>

@@ -16,9 +16,10 @@
 // specimen a few times f_ct (lateral stretch ν ε), far below concrete's f_c/f_ct ≈ 15: see
 // QUASI_BRITTLE.md.
 #include "cases.hpp"
-#include "libpd/material.hpp"
-#include "libpd/scene.hpp"
-#include "quasi_static.hpp"
+#include "libpd/physics/material.hpp"
+#include "libpd/io/scene.hpp"
+#include "curve_recorder.hpp"
+#include "libpd/time/quasi_static.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -112,11 +113,10 @@ CubeRun run_cube(const Scene& scene, const std::filesystem::path& dir, bool full
   st.max_iterations = 400;
   st.first_ramp_iterations = 100;
   st.residual_tolerance = scene.solver.steady.force_tolerance;
-  st.output_dir = dir;
   st.progress = progress;
-  st.vtu_prefix = "compression-cube";
+  std::vector<int> vtu_increments;
   if (full) {
-    st.vtu_increments = {50, 60}; // 50 % and 100 % of the closure
+    vtu_increments = {50, 60}; // 50 % and 100 % of the closure
   } else {
     st.done = [&](const Simulation&) { return r.failed; };
   }
@@ -124,8 +124,9 @@ CubeRun run_cube(const Scene& scene, const std::filesystem::path& dir, bool full
   const std::string header = "increment,strain_percent,stress_MPa,stress_bottom_MPa,"
                              "measured_strain_percent,broken_bonds,damage_free_faces,"
                              "damage_plate_faces,damage_core,iterations,residual,converged";
-  const auto outcome = quasi_static::run(
-      model, scene, st, header, [&](const Simulation& sim, const quasi_static::IncrementInfo& inc) {
+  CurveRecorder record(
+      dir, header, vtu_increments, "compression-cube",
+      [&](const Simulation& sim, const quasi_static::IncrementInfo& inc) {
         const double area = side * side;
         // The specimen pushes the top plate up (b_z > 0) and the bottom plate down.
         const double stress = quasi_static::bond_force(sim, top, 2) / area;
@@ -183,6 +184,8 @@ CubeRun run_cube(const Scene& scene, const std::filesystem::path& dir, bool full
                            *zones.find("plate_faces")->number(), *zones.find("core")->number(),
                            inc.iterations, inc.residual, inc.converged ? 1 : 0);
       });
+  const auto outcome =
+      quasi_static::run(model, scene.solver, scene.initial, st, std::ref(record));
   r.completed = outcome.completed;
   std::size_t not_converged = 0;
   for (const auto& inc : outcome.increments) {

@@ -18,10 +18,10 @@
 // reports where that ratio comes from: the bulk lattice sums with the family truncated at |ξ| ≤ δ
 // (what the model has) and with every cell that the horizon cuts (what the exact fractions assume).
 #include "cases.hpp"
-#include "libpd/corrections.hpp"
-#include "libpd/model.hpp"
-#include "libpd/scene.hpp"
-#include "libpd/stretch.hpp"
+#include "libpd/discretisation/corrections.hpp"
+#include "libpd/discretisation/model.hpp"
+#include "libpd/io/scene.hpp"
+#include "libpd/physics/stretch.hpp"
 
 #include <algorithm>
 #include <array>

@@ -20,9 +20,10 @@
 // 1.2 s0) stop once the load has fallen 30 % below the peak. See QUASI_BRITTLE.md for the
 // geometry (the paper's Figure 16 is not in our text), the derivation of s0 and the numbers.
 #include "cases.hpp"
-#include "libpd/material.hpp"
-#include "libpd/scene.hpp"
-#include "quasi_static.hpp"
+#include "libpd/physics/material.hpp"
+#include "libpd/io/scene.hpp"
+#include "curve_recorder.hpp"
+#include "libpd/time/quasi_static.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -212,15 +213,14 @@ BeamRun run_beam(const Scene& scene, const std::filesystem::path& dir, bool full
   st.max_iterations = 2000;
   st.first_ramp_iterations = 300;
   st.residual_tolerance = scene.solver.steady.force_tolerance;
-  st.output_dir = dir;
   st.progress = progress;
   st.wall_limit_seconds = wall_limit;
-  st.vtu_prefix = "rc-beam";
+  std::vector<int> vtu_increments;
   if (full) {
     for (std::size_t k = 0; k < st.levels.size(); ++k) {
       for (double f : {0.37, 0.79, 1.0}) {
         if (std::abs(st.levels[k] - f) < 1e-9) {
-          st.vtu_increments.push_back(static_cast<int>(k + 1));
+          vtu_increments.push_back(static_cast<int>(k + 1));
         }
       }
     }
@@ -231,8 +231,9 @@ BeamRun run_beam(const Scene& scene, const std::filesystem::path& dir, bool full
   Json analyses = Json::array();
   const std::string header = "increment,displacement_mm,load_kN,reaction_left_kN,reaction_right_"
                              "kN,broken_bonds,iterations,residual,converged";
-  const auto outcome = quasi_static::run(
-      model, scene, st, header, [&](const Simulation& sim, const quasi_static::IncrementInfo& inc) {
+  CurveRecorder record(
+      dir, header, vtu_increments, "rc-beam",
+      [&](const Simulation& sim, const quasi_static::IncrementInfo& inc) {
         // The bonds push the loaded particles up (b_z > 0): the jack force is P = Σ b_z V.
         const double p = quasi_static::bond_force(sim, load, 2);
         const double rl = -quasi_static::bond_force(sim, left, 2);
@@ -244,7 +245,7 @@ BeamRun run_beam(const Scene& scene, const std::filesystem::path& dir, bool full
           r.peak_displacement = d;
         }
         const std::size_t broken = quasi_static::broken_bonds(sim.model());
-        for (int v : st.vtu_increments) {
+        for (int v : vtu_increments) {
           if (v == inc.index) {
             bool shear = false;
             const double drop = r.peak_load > 0 ? 1.0 - p / r.peak_load : 0.0;
@@ -267,6 +268,8 @@ BeamRun run_beam(const Scene& scene, const std::filesystem::path& dir, bool full
                            1e-3 * p, 1e-3 * rl, 1e-3 * rr, broken, inc.iterations, inc.residual,
                            inc.converged ? 1 : 0);
       });
+  const auto outcome =
+      quasi_static::run(model, scene.solver, scene.initial, st, std::ref(record));
   r.completed = outcome.completed;
   if (full) {
     // The decision is taken on the 79 % state, the paper's Figures 18–19.

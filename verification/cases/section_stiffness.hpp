@@ -21,7 +21,7 @@
 // uniform strain cannot see. Effects of the supports, the load and the ends are not included.
 #pragma once
 
-#include "libpd/model.hpp"
+#include "libpd/discretisation/model.hpp"
 
 #include <cstddef>
 #include <string>

@@ -15,9 +15,9 @@
 // paper-resolution case also reruns with a 10× tighter tolerance and reports the difference as
 // the relaxation error, separately from the discretisation error (PD at the tight tolerance vs FE).
 #include "cases.hpp"
-#include "libpd/corrections.hpp"
-#include "libpd/run.hpp"
-#include "libpd/scene.hpp"
+#include "libpd/discretisation/corrections.hpp"
+#include "libpd/app/run.hpp"
+#include "libpd/io/scene.hpp"
 #include "section_stiffness.hpp"
 
 #include <algorithm>

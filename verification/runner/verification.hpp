@@ -5,7 +5,7 @@
 // and `pd verify` exits non-zero when a gate fails.
 #pragma once
 
-#include "libpd/output.hpp"
+#include "libpd/io/output.hpp"
 
 #include <filesystem>
 #include <functional>

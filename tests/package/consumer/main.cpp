@@ -1,6 +1,6 @@
 // Builds a 1D bar through the installed headers and library and prints its bond count.
 #include <iostream>
-#include <libpd/model.hpp>
+#include <libpd/discretisation/model.hpp>
 
 int main() {
   pd::ModelSpec spec;

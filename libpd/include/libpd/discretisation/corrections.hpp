@@ -1,0 +1,122 @@
+// Per-bond correction factors: surface corrections (a particle near a free surface misses part of
+// its horizon and is too soft) and partial-volume corrections (a neighbour whose cell is cut by the
+// horizon sphere counts with only part of its volume). Both become one multiplicative factor per
+// directed bond, folded into the bond stiffness once at set-up, so the force kernel only sees the
+// per-bond field.
+//
+// All surface corrections here are geometric: they compare a particle's own (volume-corrected)
+// bond sums with the sums of a full horizon, whatever the materials. A bond between two materials
+// is therefore not treated as a free surface (Miranda §5.2 interfaces keep their own rule: the
+// weaker material's constants, model.cpp).
+#pragma once
+
+#include "libpd/discretisation/bond_family.hpp"
+#include "libpd/discretisation/lattice.hpp"
+#include "libpd/discretisation/model.hpp"
+
+#include <array>
+#include <vector>
+
+namespace pd {
+
+/// Fraction of neighbour j's volume that counts for a bond of reference length r, for the
+/// corrections that depend on r alone (`none`, `linear`). `exact` depends on the bond vector:
+/// see exact_volume_fraction.
+double volume_fraction(VolumeCorrection correction, double r, double horizon, double spacing);
+
+/// Exact fraction of an axis-aligned cell of edge `edge` centred at `centre` (relative to the
+/// particle) that lies inside the ball |x| ≤ radius, in dimension `dim` (1: segment, 2: square,
+/// 3: cube; unused coordinates ignored). Accurate to ~1e-11 (see corrections.cpp).
+double cell_fraction_in_ball(int dim, const Vec3& centre, double edge, double radius);
+
+/// `exact` partial-volume factor of a bond ξ: the fraction of the neighbour's cell (edge λ,
+/// centred on the neighbour) inside the horizon sphere of the particle.
+double exact_volume_fraction(int dim, const Vec3& xi, double horizon, double spacing);
+
+/// Family volume Σ_j V_j·(volume fraction) of a particle in the bulk of the spec's lattice:
+/// the V0 of the `volume` surface correction (the lattice sum, not 4πδ³/3, so that quadrature
+/// error does not become a spurious bulk factor).
+double bulk_family_volume(const ModelSpec& spec);
+
+/// Continuum moments of a full horizon that the bond-based constants are calibrated to:
+///  uniaxial: ∫_H n_x⁴ |ξ| dV  (πδ⁴/5 in 3D, t·πδ³/4 in 2D, A·δ² in 1D)
+///  isotropic: ∫_H |ξ| dV      (πδ⁴ in 3D, t·2πδ³/3 in 2D, A·δ² in 1D)
+/// With c from material.hpp, ¼·c·ε²·(uniaxial moment) is the classical energy density ½Mε² of a
+/// uniaxial strain ε and ¼·c·ε²·(isotropic moment) that of an isotropic expansion, (9/2)Kε² in 3D.
+double uniaxial_energy_moment(const ModelDimension& d, double horizon);
+double isotropic_energy_moment(const ModelDimension& d, double horizon);
+
+/// Partial-volume factor of every directed bond (CSR order) for spec.volume_correction.
+std::vector<double> volume_correction_factors(const ModelSpec& spec, const ParticleSet& particles,
+                                              const BondFamily& family);
+
+/// Energy method (Madenci & Oterkus): per particle and axis d < dim, the ratio of the classical
+/// to the PD strain-energy density under a uniaxial strain along d, both with the bond weights
+/// `volume_factor` (the partial-volume factors of the same bonds). Unused axes hold 1.
+std::vector<std::array<double, 3>> energy_surface_factors(const ModelSpec& spec,
+                                                          const ParticleSet& particles,
+                                                          const BondFamily& family,
+                                                          const std::vector<double>& volume_factor);
+
+/// Continuum moment of a full horizon under uniaxial stress along one axis:
+///   ∫_H ((1+ν)n_x² − ν)² |ξ| dV = (1+ν)²·(uniaxial moment) − 2ν(1+ν)/dim·(isotropic moment)
+///                                 + ν²·(isotropic moment),
+/// with ν = 1/(dim+1), the in-plane Poisson ratio of an isotropic central-force model (1/4 in 3D,
+/// 1/3 in 2D for plane stress and plane strain alike; in 1D every bond has n_x² = 1 and ν drops
+/// out). ¼·c·ε²·(this moment) is ½Eε² in 3D and 1D, ½E'ε² in 2D (E' = E plane stress,
+/// E/(1 − ν²) plane strain): πδ⁴/6 in 3D, t·2πδ³/9 in 2D, A·δ² in 1D.
+double uniaxial_stress_energy_moment(const ModelDimension& d, double horizon);
+
+/// `tensor` correction: per particle a diagonal tensor G_i = diag(g_x, g_y, g_z) (unused axes 1)
+/// such that particle i's own halves of its bonds, each scaled by n·G_i·n, store the classical
+/// energy density of a uniaxial stress along every axis (see corrections.cpp). Bond weights
+/// `volume_factor` as in energy_surface_factors.
+std::vector<std::array<double, 3>> tensor_surface_factors(const ModelSpec& spec,
+                                                          const ParticleSet& particles,
+                                                          const BondFamily& family,
+                                                          const std::vector<double>& volume_factor);
+
+/// Per-particle factor of the `macek-silling` correction (see corrections.cpp for what it is and
+/// how sure we are of the source): classical over PD energy density under isotropic expansion.
+std::vector<double> isotropic_surface_factors(const ModelSpec& spec, const ParticleSet& particles,
+                                              const BondFamily& family,
+                                              const std::vector<double>& volume_factor);
+
+/// Names as written in scene files.
+const char* to_string(SurfaceCorrection s);
+const char* to_string(VolumeCorrection v);
+inline constexpr std::array<SurfaceCorrection, 5> all_surface_corrections{
+    SurfaceCorrection::none, SurfaceCorrection::volume, SurfaceCorrection::energy,
+    SurfaceCorrection::macek_silling, SurfaceCorrection::tensor};
+inline constexpr std::array<VolumeCorrection, 4> all_volume_corrections{
+    VolumeCorrection::none, VolumeCorrection::linear, VolumeCorrection::exact,
+    VolumeCorrection::moment};
+
+/// All names in enum order (index = enum value), for tables over every combination.
+std::array<const char*, all_surface_corrections.size()> surface_correction_names();
+std::array<const char*, all_volume_corrections.size()> volume_correction_names();
+
+/// Moment-matched bond weights w = α + β Σ_a n_a⁴ (`volume_correction: moment`): the lattice
+/// sums Σ w V |ξ| n_x⁴ and Σ w V |ξ| n_x²n_y² over a bulk family equal the continuum integrals, so
+/// the bulk elastic constants are exact for homogeneous strain (the patch test's interior ratio
+/// is 1 by construction, and the lattice's spurious Poisson ratio — 0.2775 at δ = 3.015λ without
+/// weights — becomes the bond-based 1/4).
+struct MomentWeights {
+  double alpha = 1;
+  double beta = 0;
+  static double cubic_invariant(const Vec3& xi) {
+    const double r2 = xi[0] * xi[0] + xi[1] * xi[1] + xi[2] * xi[2];
+    return (xi[0] * xi[0] * xi[0] * xi[0] + xi[1] * xi[1] * xi[1] * xi[1] +
+            xi[2] * xi[2] * xi[2] * xi[2]) /
+           (r2 * r2);
+  }
+  double weight(const Vec3& xi) const { return alpha + beta * cubic_invariant(xi); }
+};
+MomentWeights moment_matched_weights(const ModelSpec& spec);
+
+/// The product of the surface and volume correction factors for every directed bond, in CSR
+/// order. All ones when both corrections are `none`.
+std::vector<double> bond_correction_factors(const ModelSpec& spec, const ParticleSet& particles,
+                                            const BondFamily& family);
+
+} // namespace pd

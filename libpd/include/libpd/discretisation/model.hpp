@@ -1,0 +1,147 @@
+// A discretised PD model ready to run: particles, bond families, bond parameters and history,
+// supports and loads. Built once from a ModelSpec (normally read from a scene file).
+#pragma once
+
+#include "libpd/discretisation/bond_family.hpp"
+#include "libpd/physics/effects.hpp"
+#include "libpd/discretisation/lattice.hpp"
+#include "libpd/physics/material.hpp"
+
+#include <cstdint>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace pd {
+
+inline constexpr double no_limit = std::numeric_limits<double>::infinity();
+
+/// Per-bond modifiers of the bond stiffness, beyond the neighbour volume (corrections.hpp).
+enum class SurfaceCorrection { none, volume, energy, macek_silling, tensor };
+/// Quadrature weights of the bonds: partial-volume corrections of neighbour cells cut by the
+/// horizon (`linear`, `exact`), or lattice weights that reproduce the continuum's fourth moments
+/// (`moment`, see corrections.hpp).
+enum class VolumeCorrection { none, linear, exact, moment };
+
+/// Bond stiffness and strengths. Either one value for the whole body (uniform) or one value per
+/// directed bond (per-bond field): the kernel is compiled for one of the two.
+struct BondField {
+  double stiffness = 0;                      ///< c·V_j [N/m³ per unit stretch], uniform case
+  double critical_stretch = no_limit;        ///< s0, uniform case
+  double yield_stretch = no_limit;           ///< s_Y, uniform case
+  std::vector<double> bond_stiffness;        ///< c_ij·V_j·(correction factors), per bond
+  std::vector<double> bond_critical_stretch; ///< allocated only with damage
+  std::vector<double> bond_yield_stretch;    ///< allocated only with plasticity
+
+  bool per_bond() const { return !bond_stiffness.empty(); }
+};
+
+/// History that only some effects need; each array is allocated only when its effect is on.
+struct BondState {
+  std::vector<std::uint8_t> broken;    ///< per directed bond, damage only
+  std::vector<double> plastic_stretch; ///< per directed bond, plasticity only
+  std::vector<double> damage;          ///< per particle damage index φ (eq. 13), damage only
+};
+
+/// A prescribed displacement of one component of one particle. With a load ramp the value is
+/// reached gradually, u = F(t)·value (Miranda §3.2 step 14). A mirror constraint instead copies
+/// the displacement of another particle's same component, times ±1 (SupportSpec::mirror).
+struct Constraint {
+  static constexpr std::uint32_t no_mirror = std::numeric_limits<std::uint32_t>::max();
+  std::uint32_t particle = 0;
+  std::uint8_t component = 0;
+  double value = 0;
+  std::uint32_t mirror_of = no_mirror; ///< source particle of a mirror constraint
+  double mirror_sign = 0;              ///< u = mirror_sign · u(source)
+};
+
+struct BoxRegionLoad {
+  Region region;
+  enum class Kind { total, per_area, per_length, body } kind = Kind::total;
+  Vec3 value{0, 0, 0};
+  double measure = 1; ///< area [m²] or length [m] for per_area / per_length
+};
+
+struct SupportSpec {
+  std::string name;
+  Region region;
+  std::array<bool, 3> fixed{false, false, false};
+  std::array<bool, 3> prescribed{false, false, false};
+  Vec3 displacement{0, 0, 0};
+  /// Clamped face without a rigid block: each particle of the support takes the displacement of
+  /// its mirror image across the planes x_a = mirror_at[a] (every a with mirror[a]), negated once
+  /// per plane. The displacement then vanishes on the face with the strain continuous across it,
+  /// where a block of fixed particles leaves the bonds into it elastic over their whole length
+  /// and so puts the clamp about one spacing behind the face.
+  std::array<bool, 3> mirror{false, false, false};
+  Vec3 mirror_at{0, 0, 0};
+  bool mirrors() const { return mirror[0] || mirror[1] || mirror[2]; }
+};
+
+struct LoadSpec {
+  std::string name;
+  BoxRegionLoad load;
+};
+
+/// Everything needed to build the discrete model (no solver settings).
+struct ModelSpec {
+  ModelDimension dimension;
+  LatticeSpec lattice;
+  HorizonRule horizon_rule = HorizonRule::inclusive;
+  std::vector<Material> materials;
+  std::vector<BodySpec> bodies;
+  std::vector<SupportSpec> supports;
+  std::vector<LoadSpec> loads;
+  EffectSet effects;
+  SurfaceCorrection surface_correction = SurfaceCorrection::none;
+  VolumeCorrection volume_correction = VolumeCorrection::none;
+};
+
+struct Model {
+  ModelSpec spec;
+  ParticleSet particles;
+  BondFamily family;
+  BondField field;
+  BondState state;
+  EffectSet effects;
+  std::vector<double> density;                ///< per particle [kg/m³]
+  std::vector<Constraint> constraints;        ///< sorted by particle, then component
+  std::vector<double> external_force_density; ///< 3N, full (unramped) load [N/m³]
+
+  std::size_t size() const { return particles.size(); }
+  double horizon() const { return spec.lattice.horizon(); }
+  /// Bytes held by the model (particles, families, bond field and history).
+  std::size_t memory_bytes() const;
+};
+
+/// Estimate of the memory `build_model` will need, from the lattice size alone (no allocation).
+struct ModelSizeEstimate {
+  std::size_t particles = 0;
+  double bonds = 0; ///< estimated from the bulk family size
+  double bytes = 0;
+};
+ModelSizeEstimate estimate_model_size(const ModelSpec& spec);
+
+/// A support that cannot act as specified; `support` is its index in ModelSpec::supports.
+struct SupportError : std::runtime_error {
+  SupportError(std::size_t index, const std::string& what)
+      : std::runtime_error(what), support(index) {}
+  std::size_t support;
+};
+
+/// The constraints of spec.supports on `particles`, sorted by particle and component (a later
+/// support overrides an earlier one on the same component). Throws SupportError for a support
+/// that holds no particle or whose mirror images are not free lattice particles.
+std::vector<Constraint> support_constraints(const ModelSpec& spec, const ParticleSet& particles);
+
+/// Build particles, families, bond parameters, supports and loads.
+/// Throws std::runtime_error for inconsistent specs that the scene checker did not catch.
+Model build_model(const ModelSpec& spec);
+
+/// Bond stiffness of directed bond k, c_ij·V_j·corrections, whichever storage the model uses.
+inline double bond_stiffness(const Model& m, std::size_t k) {
+  return m.field.per_bond() ? m.field.bond_stiffness[k] : m.field.stiffness;
+}
+
+} // namespace pd

@@ -1,0 +1,69 @@
+// Scene files: the YAML description of a run (model, solver, probes, output).
+//
+// Every key is declared in a schema with its type, unit, range and documentation, so that errors
+// name file:line:column with a one-line fix hint and `pd run --print-defaults` can write a
+// commented template. Loading never throws anything but SceneError.
+#pragma once
+
+#include "libpd/discretisation/model.hpp"
+#include "libpd/time/simulation.hpp"
+
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace pd {
+
+/// A position in a scene file (1-based line and column; 0 if unknown).
+struct SourceMark {
+  int line = 0;
+  int column = 0;
+};
+
+/// A bad scene: message is "FILE:LINE:COLUMN: error: WHAT\n  hint: HOW TO FIX".
+class SceneError : public std::runtime_error {
+public:
+  SceneError(std::string file, SourceMark mark, const std::string& what, const std::string& hint);
+  const std::string& file() const { return file_; }
+  SourceMark mark() const { return mark_; }
+
+private:
+  std::string file_;
+  SourceMark mark_;
+};
+
+struct ProbeSpec {
+  std::string name;
+  enum class Kind { point, region } kind = Kind::point;
+  Vec3 point{0, 0, 0};
+  Region region;
+  int component = 0; ///< 0, 1, 2 = x, y, z
+};
+
+struct OutputSpec {
+  std::size_t vtu_every = 0;     ///< steps between VTU files; 0: final state only
+  std::size_t history_every = 0; ///< steps between probe history rows; 0: no history
+  bool vtu = true;
+};
+
+struct Scene {
+  std::string path; ///< file it was read from
+  std::string title;
+  ModelSpec model;
+  SolverSpec solver;
+  InitialSpec initial;
+  std::vector<ProbeSpec> probes;
+  OutputSpec output;
+  std::vector<std::string> warnings; ///< "FILE:LINE:COL: warning: ..." lines
+};
+
+/// Read and check a scene. Throws SceneError for every problem it can detect without running,
+/// including empty regions and loads or probes that select no particle.
+Scene load_scene(const std::string& path);
+/// Same, from text (tests); `name` stands in for the file name in messages.
+Scene parse_scene(const std::string& text, const std::string& name);
+
+/// A commented template listing every key with its default, unit and meaning.
+std::string scene_template();
+
+} // namespace pd

@@ -1,0 +1,174 @@
+// Explicit time integrators. All share one interface so that a run, a verification case or the
+// stability bisection can swap them; each reports the same counters.
+//
+//  damped-euler  Miranda §3.2: semi-implicit Euler with kinematic damping
+//                v ← ψ [v + Δt a],  y ← y + Δt v,  ψ = (1 + Δt c_v/ρ)⁻¹ (eq. 32), loads and
+//                prescribed displacements ramped with F = min(t/t_max, 1) (eq. 33).
+//  euler-cromer  the same without damping (Pasupathy eq. 6 as Euler–Cromer: the position update
+//                uses the new velocity; with the old one, as eq. 6 is printed, the scheme is
+//                forward Euler and unconditionally unstable for an undamped oscillator).
+//  verlet        velocity Verlet, second order and symplectic; for dynamics and energy checks.
+//  adr           adaptive dynamic relaxation (Kilic & Madenci 2010; src/adr.cpp): central
+//                differences in fictitious time (Δt = 1) with a fictitious diagonal density from
+//                the Gershgorin bound of the stiffness and a damping coefficient from the Rayleigh
+//                quotient of the local stiffness, recomputed every step. Quasi-static only.
+//  arkode        SUNDIALS ARKode ERKStep on y = [u; v], y' = [v; a(u, v, t)]
+//                (src/arkode_integrator.cpp): a Butcher table, fixed or adaptive steps, kinematic
+//                damping as a term of the right-hand side. Needs LIBPD_WITH_SUNDIALS.
+#pragma once
+
+#include "libpd/kernel/force_kernel.hpp"
+#include "libpd/discretisation/model.hpp"
+
+#include <cstddef>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace pd {
+
+enum class IntegratorKind { damped_euler, euler_cromer, verlet, adr, arkode };
+
+std::string to_string(IntegratorKind kind);
+
+/// Butcher tables offered for `arkode`, in the order of the scene's `solver.arkode.table` words.
+/// Only tables that compute correctly with SUNDIALS 6.4.1 are offered: the native tables whose
+/// last node c_s ≠ 1 or that are truly FSAL (last row of A = bᵀ), and two tables hit by upstream
+/// issue #311 (c_s = 1, not FSAL) that run with the reset work-around (see ArkodeSpec).
+enum class ArkodeTable {
+  heun_euler,       ///< ARKODE_HEUN_EULER_2_1_2, order 2(1); c_s = 1, not FSAL: work-around
+  bogacki_shampine, ///< ARKODE_BOGACKI_SHAMPINE_4_2_3, order 3(2), FSAL
+  knoth_wolke,      ///< ARKODE_KNOTH_WOLKE_3_3, order 3, c_s = 3/4, no embedding
+  rk4,              ///< classic 4-stage RK4 (Kutta 1901), c_s = 1, not FSAL: work-around
+  zonneveld,        ///< ARKODE_ZONNEVELD_5_3_4, order 4(3), c_s = 3/4
+  cash_karp,        ///< ARKODE_CASH_KARP_6_4_5, order 5(4), c_s = 7/8
+  fehlberg,         ///< ARKODE_FEHLBERG_6_4_5, order 5(4), c_s = 1/2
+  dormand_prince,   ///< ARKODE_DORMAND_PRINCE_7_4_5, order 5(4), FSAL
+};
+inline constexpr int arkode_table_count = 8;
+std::string to_string(ArkodeTable table);
+
+/// An explicit Butcher table (c, A, b and the embedding d), as handed to SUNDIALS.
+struct ButcherTableau {
+  std::string name;
+  int stages = 0;
+  int order = 0;
+  int embedded_order = 0; ///< 0: no embedding (fixed steps only)
+  std::vector<double> c;  ///< s nodes
+  std::vector<double> a;  ///< s × s, row-major, strictly lower triangular
+  std::vector<double> b;  ///< s weights
+  std::vector<double> d;  ///< s embedding weights (empty without embedding)
+  /// c_s = 1 but the last row of A differs from bᵀ: SUNDIALS 6.4.1 (issue #311, fixed in 6.7.0)
+  /// reuses f at the last stage as f(y_{n+1}) for such tables.
+  bool hit_by_issue_311() const;
+};
+
+/// Coefficients of one of the offered tables (from SUNDIALS' own table for the native ones).
+/// Throws std::runtime_error if libpd was built without SUNDIALS.
+ButcherTableau butcher_tableau(ArkodeTable table);
+/// A native SUNDIALS ERK table by its ARKODE_ERKTableID number (tests of tables not offered).
+ButcherTableau sundials_erk_tableau(int table_id);
+/// Whether libpd was built with SUNDIALS (LIBPD_WITH_SUNDIALS and the package found).
+bool arkode_available();
+
+/// `solver.arkode`: options of the ARKode ERKStep integrator.
+struct ArkodeSpec {
+  ArkodeTable table = ArkodeTable::rk4;
+  bool adaptive = false; ///< false: fixed steps of solver.dt; true: error control inside each dt
+  double rtol = 1e-6;    ///< relative tolerance (adaptive only)
+  double atol = 1e-12;   ///< absolute tolerance on u [m] and v [m/s] (adaptive only)
+  /// Work around SUNDIALS issue #311 for tables with c_s = 1 that are not FSAL by resetting the
+  /// integrator (ERKStepReset) before every step, so that the first stage is f(y_n) recomputed.
+  /// Only tests switch it off, to demonstrate the defect.
+  bool issue_311_workaround = true;
+};
+
+/// Positions, velocities and the last internal force density of every particle.
+struct State {
+  std::vector<double> position; ///< y = X + u, 3N
+  std::vector<double> velocity; ///< 3N
+  std::vector<double> force;    ///< internal force density b at the last evaluation, 3N
+  double time = 0;
+  std::size_t step = 0;
+};
+
+/// Load factor F(t) = min(t/t_ramp, 1) (eq. 33); F = 1 without a ramp.
+struct LoadRamp {
+  double ramp_time = 0;
+  double factor(double t) const {
+    return ramp_time > 0 ? (t < ramp_time ? t / ramp_time : 1.0) : 1.0;
+  }
+  double rate(double t) const { return ramp_time > 0 && t < ramp_time ? 1.0 / ramp_time : 0.0; }
+};
+
+struct StepReport {
+  /// Largest squared displacement |y − X|² after the step; NaN if any value is non-finite.
+  double max_displacement_squared = 0;
+  std::size_t max_displacement_particle = 0;
+};
+
+class CheckpointWriter;
+class CheckpointReader;
+
+class Integrator {
+public:
+  virtual ~Integrator() = default;
+  /// Advance the state by dt (ADR: one iteration in fictitious time; the state's time still
+  /// advances by dt, so loads ramp over iterations as over steps).
+  virtual StepReport step(State& state, double dt) = 0;
+  virtual std::string name() const = 0;
+  std::size_t force_evaluations() const { return force_evaluations_; }
+  /// Steps taken by the method itself; differs from the calls to step() only for adaptive ARKode.
+  virtual std::size_t internal_steps() const { return calls_; }
+  /// Imaginary-axis stability interval of the method divided by that of central differences (2):
+  /// the factor on the eq. 31 step that keeps the same margin. 1 for the Störmer-type schemes.
+  virtual double stability_scale() const { return 1.0; }
+
+  /// Checkpoints: everything the next step() reads besides the State and the model's bond
+  /// history (counters, the integrator's own vectors and flags), so that a restored run continues
+  /// bitwise. save() writes the name and counters, then save_state(); restore() reads them back and
+  /// refuses a checkpoint of another integrator.
+  void save(CheckpointWriter& w) const;
+  void restore(CheckpointReader& r);
+  /// Empty if a checkpoint can continue this integrator bitwise; otherwise the reason it cannot.
+  virtual std::string checkpoint_refusal() const { return {}; }
+
+protected:
+  virtual void save_state(CheckpointWriter&) const {}
+  virtual void restore_state(CheckpointReader&) {}
+
+  std::size_t force_evaluations_ = 0;
+  std::size_t calls_ = 0;
+};
+
+struct IntegratorSettings {
+  IntegratorKind kind = IntegratorKind::damped_euler;
+  double damping = 0; ///< c_v [kg/(m³ s)]: damped-euler, and arkode as a right-hand-side term
+  LoadRamp ramp;
+  ArkodeSpec arkode;
+  /// Step bound handed to ERKStepSetStabilityFn for adaptive ARKode [s]; 0: none.
+  double stable_dt = 0;
+  double cfl_fraction = 0.8; ///< fraction of stable_dt the adaptive controller may use
+};
+
+/// Throws std::invalid_argument for combinations that cannot run (arkode without SUNDIALS, with
+/// damage or plasticity, adaptive without an embedding).
+std::unique_ptr<Integrator> make_integrator(const IntegratorSettings& settings, Model& model,
+                                            ForceEvaluator& forces);
+std::unique_ptr<Integrator> make_adr_integrator(const IntegratorSettings& settings, Model& model,
+                                                ForceEvaluator& forces);
+std::unique_ptr<Integrator> make_arkode_integrator(const IntegratorSettings& settings, Model& model,
+                                                   ForceEvaluator& forces);
+
+/// ADR's fictitious density λ per degree of freedom (3N): ¼ Δt² times the Gershgorin row sum of
+/// the linearised bond operator, Δt = 1 (src/adr.cpp).
+std::vector<double> adr_fictitious_density(const Model& model);
+
+/// Largest |u|² over particles (may be +inf), NaN as soon as any coordinate is not finite.
+StepReport displacement_report(const Model& model, const double* y);
+
+/// Apply prescribed displacements at time t to positions (and velocities if given).
+void apply_constraints(const Model& model, const LoadRamp& ramp, double t, double* position,
+                       double* velocity);
+
+} // namespace pd

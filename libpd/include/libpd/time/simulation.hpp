@@ -1,0 +1,120 @@
+// A run: integrate a model until a fixed time, a steady state or a step limit, watching for
+// instability. Quasi-static runs end when they have converged, not after a fixed step count.
+#pragma once
+
+#include "libpd/time/integrator.hpp"
+#include "libpd/discretisation/model.hpp"
+
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string>
+
+namespace pd {
+
+/// Steady state: after the load ramp, kinetic energy ≤ kinetic_tolerance × strain energy and
+/// residual force norm ≤ force_tolerance × reference force (applied loads, or the support reactions
+/// when only displacements are prescribed). Checked every `check_every` steps.
+struct SteadyStateCriterion {
+  bool enabled = false;
+  double kinetic_tolerance = 1e-10;
+  double force_tolerance = 1e-6;
+  std::size_t check_every = 100;
+};
+
+struct SolverSpec {
+  IntegratorKind integrator = IntegratorKind::damped_euler;
+  ArkodeSpec arkode; ///< `solver.arkode`, for the arkode integrator
+  /// nullopt: auto = safety × eq. 31 × the integrator's stability_scale() (β/2 for an RK table).
+  /// ADR iterates in fictitious time (Δt = 1); dt then only maps iterations onto the scene's time
+  /// axis (end_time, ramp_time).
+  std::optional<double> dt;
+  double safety = 0.8;
+  std::optional<double> end_time;
+  SteadyStateCriterion steady;
+  double ramp_time = 0;
+  double damping = 0; ///< c_v
+  std::size_t max_steps = 100'000'000;
+  /// A displacement larger than this means the run has blown up. 0: the bounding-box diagonal.
+  double blowup_displacement = 0;
+};
+
+/// Initial displacement u0 = H (X − about) and uniform initial velocity.
+struct InitialSpec {
+  std::array<std::array<double, 3>, 3> displacement_gradient{};
+  Vec3 about{0, 0, 0};
+  Vec3 velocity{0, 0, 0};
+};
+
+enum class RunStatus { end_time, converged, max_steps, unstable, interrupted };
+std::string to_string(RunStatus status);
+
+struct RunResult {
+  RunStatus status = RunStatus::end_time;
+  std::size_t steps = 0;
+  std::size_t internal_steps = 0; ///< steps of the method (adaptive ARKode: its accepted steps)
+  double time = 0;
+  double dt = 0;
+  double dt_stable = 0;
+  double wall_seconds = 0;
+  std::size_t force_evaluations = 0;
+  double kinetic_energy = 0;
+  double strain_energy = 0;
+  double residual = 0; ///< relative residual force at the last steady-state check (NaN if none)
+  std::string message; ///< for unstable runs: step, Δt and limit
+};
+
+class Simulation {
+public:
+  Simulation(Model& model, const SolverSpec& solver, const InitialSpec& initial = {});
+
+  /// Observer called after every step with the current state; return false to stop the run
+  /// (status `interrupted`).
+  using Observer = std::function<bool(const Simulation&)>;
+  RunResult run(const Observer& observer = {});
+
+  const Model& model() const { return model_; }
+  const State& state() const { return state_; }
+  double dt() const { return dt_; }
+  double dt_stable() const { return dt_stable_; }
+  double kinetic_energy() const;
+  double strain_energy() const;
+  /// Displacement u = y − X of particle i, component c.
+  double displacement(std::size_t i, int c) const {
+    return state_.position[3 * i + c] - model_.particles.position[i][c];
+  }
+  const ForceEvaluator& forces() const { return *forces_; }
+  /// Add du (3N) to the positions of the unconstrained components before a run (stability
+  /// measurements start from a perturbed state).
+  void perturb(const std::vector<double>& du);
+  const Integrator& integrator() const { return *integrator_; }
+
+  /// Checkpoints (checkpoint.hpp): the State, the model's bond history (broken bonds, damage,
+  /// plastic stretch), the step at which the run started (max_steps counts from it) and the
+  /// integrator's own state. A Simulation built from the same model and solver settings and
+  /// restored from it continues bitwise as the saved one would have. Throws CheckpointError if the
+  /// integrator cannot be checkpointed (see Integrator::checkpoint_refusal) or the data do not fit.
+  void save(CheckpointWriter& w) const;
+  void restore(CheckpointReader& r);
+
+private:
+  Model& model_;
+  SolverSpec solver_;
+  State state_;
+  std::unique_ptr<ForceEvaluator> forces_;
+  std::unique_ptr<Integrator> integrator_;
+  LoadRamp ramp_;
+  double dt_ = 0;
+  double dt_stable_ = 0;
+  double blowup_squared_ = 0;
+  /// 1 for each constrained degree of freedom; fixed for the run, so built once.
+  std::vector<std::uint8_t> constrained_;
+  /// Step at which the current run started; a restored run keeps the original one.
+  std::size_t run_origin_ = 0;
+  bool resumed_ = false;
+
+  double relative_residual() const;
+};
+
+} // namespace pd

@@ -1,0 +1,311 @@
+#include "libpd/discretisation/model.hpp"
+
+#include "libpd/discretisation/corrections.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <set>
+#include <stdexcept>
+
+namespace pd {
+
+namespace {
+
+/// Tolerance for "a particle lies in a region": far below λ, far above round-off.
+std::string point_text(const Vec3& p) {
+  char buffer[96];
+  std::snprintf(buffer, sizeof buffer, "(%.6g, %.6g, %.6g)", p[0], p[1], p[2]);
+  return buffer;
+}
+
+/// Mirror constraints of a support (SupportSpec::mirror): each member takes the displacement of
+/// the particle at its reflection across every mirror plane, negated once per plane. The image is
+/// looked up on a grid of λ/4, so it must be a lattice point (regular lattices only).
+/// A constraint with the index of the support that set it (for error messages).
+struct OwnedConstraint {
+  Constraint constraint;
+  std::size_t support = 0;
+};
+
+void add_mirror_constraints(const ParticleSet& particles, double spacing, std::size_t support,
+                            const SupportSpec& sup, const std::vector<std::uint32_t>& members,
+                            std::vector<OwnedConstraint>& constraints) {
+  const double cell = 0.25 * spacing;
+  const auto key = [cell](const Vec3& p) {
+    return std::array<long long, 3>{std::llround(p[0] / cell), std::llround(p[1] / cell),
+                                    std::llround(p[2] / cell)};
+  };
+  std::map<std::array<long long, 3>, std::uint32_t> at;
+  for (std::size_t i = 0; i < particles.size(); ++i) {
+    at.emplace(key(particles.position[i]), static_cast<std::uint32_t>(i));
+  }
+  for (std::uint32_t i : members) {
+    Vec3 image = particles.position[i];
+    double sign = 1.0;
+    for (int a = 0; a < 3; ++a) {
+      if (sup.mirror[a]) {
+        image[a] = 2.0 * sup.mirror_at[a] - image[a];
+        sign = -sign;
+      }
+    }
+    const auto found = at.find(key(image));
+    if (found == at.end() || found->second == i) {
+      throw SupportError(support, "support '" + sup.name + "': no particle at the mirror image " +
+                                      point_text(image) + " of the particle at " +
+                                      point_text(particles.position[i]));
+    }
+    for (std::uint8_t c = 0; c < 3; ++c) {
+      constraints.push_back({{i, c, 0.0, found->second, sign}, support});
+    }
+  }
+}
+
+double region_tolerance(const ModelSpec& spec) {
+  return 1e-6 * spec.lattice.spacing;
+}
+
+struct MaterialConstants {
+  double c = 0;
+  double critical_stretch = no_limit;
+  double yield_stretch = no_limit;
+};
+
+std::vector<MaterialConstants> material_constants(const ModelSpec& spec) {
+  std::vector<MaterialConstants> out;
+  const double delta = spec.lattice.horizon();
+  for (const Material& m : spec.materials) {
+    MaterialConstants k;
+    k.c = micromodulus(spec.dimension, m.youngs_modulus, delta) * m.stiffness_factor;
+    if (m.critical_stretch) {
+      k.critical_stretch = *m.critical_stretch;
+    } else if (m.fracture_energy) {
+      k.critical_stretch = critical_stretch_from_fracture_energy(
+          spec.dimension, m.youngs_modulus * m.stiffness_factor, delta, *m.fracture_energy);
+    }
+    if (m.yield_stretch) {
+      k.yield_stretch = *m.yield_stretch;
+    }
+    out.push_back(k);
+  }
+  return out;
+}
+
+std::vector<std::uint32_t> particles_in(const ParticleSet& ps, const Region& region, int dim,
+                                        double tol) {
+  std::vector<std::uint32_t> out;
+  for (std::size_t i = 0; i < ps.size(); ++i) {
+    if (region.contains(ps.position[i], dim, tol)) {
+      out.push_back(static_cast<std::uint32_t>(i));
+    }
+  }
+  return out;
+}
+
+} // namespace
+
+std::vector<Constraint> support_constraints(const ModelSpec& spec, const ParticleSet& particles) {
+  const double tol = region_tolerance(spec);
+  std::vector<OwnedConstraint> constraints;
+  for (std::size_t s = 0; s < spec.supports.size(); ++s) {
+    const SupportSpec& sup = spec.supports[s];
+    const auto members = particles_in(particles, sup.region, spec.dimension.dim, tol);
+    if (members.empty()) {
+      throw SupportError(s, "support '" + sup.name + "' holds no particle");
+    }
+    if (sup.mirrors()) {
+      add_mirror_constraints(particles, spec.lattice.spacing, s, sup, members, constraints);
+      continue;
+    }
+    for (std::uint32_t i : members) {
+      for (std::uint8_t c = 0; c < 3; ++c) {
+        if (sup.fixed[c] || sup.prescribed[c]) {
+          constraints.push_back({{i, c, sup.prescribed[c] ? sup.displacement[c] : 0.0}, s});
+        }
+      }
+    }
+  }
+  // Later supports override earlier ones on the same component.
+  std::stable_sort(constraints.begin(), constraints.end(),
+                   [](const OwnedConstraint& a, const OwnedConstraint& b) {
+                     return a.constraint.particle != b.constraint.particle
+                                ? a.constraint.particle < b.constraint.particle
+                                : a.constraint.component < b.constraint.component;
+                   });
+  std::vector<OwnedConstraint> merged;
+  for (const OwnedConstraint& o : constraints) {
+    if (!merged.empty() && merged.back().constraint.particle == o.constraint.particle &&
+        merged.back().constraint.component == o.constraint.component) {
+      merged.back() = o;
+    } else {
+      merged.push_back(o);
+    }
+  }
+  // A mirror source must move freely: apply_constraints reads it before the constraints act.
+  std::vector<std::uint8_t> held(3 * particles.size(), 0);
+  for (const OwnedConstraint& o : merged) {
+    held[3 * o.constraint.particle + o.constraint.component] = 1;
+  }
+  std::vector<Constraint> out;
+  out.reserve(merged.size());
+  for (const OwnedConstraint& o : merged) {
+    const Constraint& c = o.constraint;
+    if (c.mirror_of != Constraint::no_mirror && held[3 * c.mirror_of + c.component]) {
+      throw SupportError(o.support,
+                         "support '" + spec.supports[o.support].name + "': the mirror image " +
+                             point_text(particles.position[c.mirror_of]) + " of the particle at " +
+                             point_text(particles.position[c.particle]) + " is itself supported");
+    }
+    out.push_back(c);
+  }
+  return out;
+}
+
+std::size_t Model::memory_bytes() const {
+  const std::size_t n = size();
+  std::size_t bytes = n * (sizeof(Vec3) + sizeof(double) + 2 * sizeof(std::uint16_t));
+  bytes += family.memory_bytes();
+  bytes += (field.bond_stiffness.size() + field.bond_critical_stretch.size() +
+            field.bond_yield_stretch.size()) *
+           sizeof(double);
+  bytes +=
+      state.broken.size() + (state.plastic_stretch.size() + state.damage.size()) * sizeof(double);
+  bytes += density.size() * sizeof(double) + external_force_density.size() * sizeof(double);
+  bytes += constraints.size() * sizeof(Constraint);
+  bytes += 9 * n * sizeof(double); // run state: positions, velocities, forces
+  return bytes;
+}
+
+ModelSizeEstimate estimate_model_size(const ModelSpec& spec) {
+  ModelSizeEstimate e;
+  Region all;
+  for (const BodySpec& b : spec.bodies) {
+    all.boxes.insert(all.boxes.end(), b.region.boxes.begin(), b.region.boxes.end());
+  }
+  e.particles = count_lattice_points(spec.dimension, spec.lattice, all);
+  const double lambda = spec.lattice.spacing;
+  const double family = bulk_family_volume(spec) / cell_volume(spec.dimension, lambda);
+  e.bonds = 0.5 * static_cast<double>(e.particles) * family;
+  const double per_directed = sizeof(std::uint32_t) + sizeof(double) +
+                              (spec.surface_correction != SurfaceCorrection::none ||
+                                       spec.volume_correction != VolumeCorrection::none
+                                   ? sizeof(double)
+                                   : 0) +
+                              (spec.effects.damage ? 1.0 : 0.0) +
+                              (spec.effects.plasticity ? sizeof(double) : 0);
+  e.bytes = static_cast<double>(e.particles) * (sizeof(Vec3) + 14.0 * sizeof(double)) +
+            2.0 * e.bonds * per_directed;
+  return e;
+}
+
+Model build_model(const ModelSpec& spec) {
+  if (spec.materials.empty() || spec.bodies.empty()) {
+    throw std::runtime_error("a model needs at least one material and one body");
+  }
+  Model m;
+  m.spec = spec;
+  const int dim = spec.dimension.dim;
+  const double delta = spec.lattice.horizon();
+  m.particles = generate_lattice(spec.dimension, spec.lattice, spec.bodies);
+  const std::size_t n = m.particles.size();
+  if (n == 0) {
+    throw std::runtime_error("the bodies contain no lattice particle");
+  }
+  m.family = build_bond_family(m.particles.position, dim, delta, spec.horizon_rule);
+
+  // Effects that follow from the model rather than being declared.
+  m.effects = spec.effects;
+  const std::set<std::uint16_t> used(m.particles.material.begin(), m.particles.material.end());
+  m.effects.per_bond_field =
+      used.size() > 1 || spec.surface_correction != SurfaceCorrection::none ||
+      spec.volume_correction != VolumeCorrection::none || spec.lattice.volume_variation > 0;
+  m.effects.body_force = std::any_of(spec.loads.begin(), spec.loads.end(), [](const LoadSpec& l) {
+    return l.load.kind == BoxRegionLoad::Kind::body;
+  });
+
+  const auto constants = material_constants(spec);
+  m.density.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    m.density[i] = spec.materials[m.particles.material[i]].density;
+  }
+
+  if (!m.effects.per_bond_field) {
+    const MaterialConstants& k = constants[*used.begin()];
+    m.field.stiffness = k.c * m.particles.volume[0];
+    m.field.critical_stretch = k.critical_stretch;
+    m.field.yield_stretch = k.yield_stretch;
+  } else {
+    const std::size_t nb = m.family.directed_bond_count();
+    m.field.bond_stiffness.resize(nb);
+    if (m.effects.damage) {
+      m.field.bond_critical_stretch.resize(nb);
+    }
+    if (m.effects.plasticity) {
+      m.field.bond_yield_stretch.resize(nb);
+    }
+    const std::vector<double> correction = bond_correction_factors(spec, m.particles, m.family);
+    for (std::size_t i = 0; i < n; ++i) {
+      for (std::size_t k = m.family.offsets[i]; k < m.family.offsets[i + 1]; ++k) {
+        const std::size_t j = m.family.neighbour[k];
+        // A bond between two materials takes the weaker one's constants (Miranda §5.2: interface
+        // bonds have the properties of concrete).
+        const MaterialConstants& a = constants[m.particles.material[i]];
+        const MaterialConstants& b = constants[m.particles.material[j]];
+        m.field.bond_stiffness[k] = std::min(a.c, b.c) * m.particles.volume[j] * correction[k];
+        if (m.effects.damage) {
+          m.field.bond_critical_stretch[k] = std::min(a.critical_stretch, b.critical_stretch);
+        }
+        if (m.effects.plasticity) {
+          m.field.bond_yield_stretch[k] = std::min(a.yield_stretch, b.yield_stretch);
+        }
+      }
+    }
+  }
+  if (m.effects.damage) {
+    m.state.broken.assign(m.family.directed_bond_count(), 0);
+    m.state.damage.assign(n, 0.0);
+  }
+  if (m.effects.plasticity) {
+    m.state.plastic_stretch.assign(m.family.directed_bond_count(), 0.0);
+  }
+
+  m.constraints = support_constraints(spec, m.particles);
+  const double tol = region_tolerance(spec);
+
+  // Loads become force densities [N/m³]; a resultant is shared in proportion to particle volume.
+  if (!spec.loads.empty()) {
+    m.external_force_density.assign(3 * n, 0.0);
+  }
+  for (const LoadSpec& load : spec.loads) {
+    const auto members = particles_in(m.particles, load.load.region, dim, tol);
+    if (members.empty()) {
+      throw std::runtime_error("load '" + load.name + "' acts on no particle");
+    }
+    double total_volume = 0;
+    for (std::uint32_t i : members) {
+      total_volume += m.particles.volume[i];
+    }
+    for (int c = 0; c < 3; ++c) {
+      double density = 0;
+      switch (load.load.kind) {
+      case BoxRegionLoad::Kind::body:
+        density = load.load.value[c];
+        break;
+      case BoxRegionLoad::Kind::total:
+        density = load.load.value[c] / total_volume;
+        break;
+      case BoxRegionLoad::Kind::per_area:
+      case BoxRegionLoad::Kind::per_length:
+        density = load.load.value[c] * load.load.measure / total_volume;
+        break;
+      }
+      for (std::uint32_t i : members) {
+        m.external_force_density[3 * i + c] += density;
+      }
+    }
+  }
+  return m;
+}
+
+} // namespace pd

@@ -1,0 +1,364 @@
+#include "libpd/io/resources.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <charconv>
+#include <cmath>
+#include <cstdint>
+#include <cstdlib>
+#include <fmt/format.h>
+#include <fstream>
+#include <limits>
+#include <numbers>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace pd {
+
+namespace {
+
+constexpr double inf = std::numeric_limits<double>::infinity();
+
+/// Lattice index interval [first, last] of one axis, in floating point so that boxes far beyond
+/// the range of long long cannot overflow. The rule is the one of lattice.cpp's `index_range`.
+struct Interval {
+  double first = 0;
+  double last = -1;
+  double count() const {
+    if (!std::isfinite(first) || !std::isfinite(last)) {
+      return std::isnan(first) || std::isnan(last) || first == inf || last == -inf ? 0.0 : inf;
+    }
+    return last >= first ? last - first + 1 : 0.0;
+  }
+};
+
+Interval axis_interval(const LatticeSpec& l, int axis, double lo, double hi) {
+  const double shift = l.convention == LatticeConvention::cell_centered ? 0.5 : 0.0;
+  const double tol = 1e-6;
+  const double a = (lo - l.origin[axis]) / l.spacing - shift;
+  const double b = (hi - l.origin[axis]) / l.spacing - shift;
+  return {std::ceil(a - tol), std::floor(b + tol)};
+}
+
+/// Sum over boxes of the points per box: an upper bound of the union.
+double sum_over_boxes(const ModelDimension& d, const LatticeSpec& lattice, const Region& region) {
+  double sum = 0;
+  for (const Box& b : region.boxes) {
+    sum += lattice_points_in_box(d, lattice, b);
+  }
+  return sum;
+}
+
+std::size_t distinct_materials(const ModelSpec& spec) {
+  std::vector<int> used;
+  for (const BodySpec& b : spec.bodies) {
+    if (std::find(used.begin(), used.end(), b.material) == used.end()) {
+      used.push_back(b.material);
+    }
+  }
+  return used.size();
+}
+
+} // namespace
+
+double lattice_points_in_box(const ModelDimension& d, const LatticeSpec& lattice, const Box& box) {
+  double product = 1;
+  for (int a = 0; a < d.dim; ++a) {
+    const double n = axis_interval(lattice, a, box.lo[a], box.hi[a]).count();
+    if (n == 0) {
+      return 0; // an empty axis empties the box even if another axis is unbounded
+    }
+    product *= n;
+  }
+  return product;
+}
+
+double lattice_points_in_union(const ModelDimension& d, const LatticeSpec& lattice,
+                               const Region& region) {
+  const std::size_t k = region.boxes.size();
+  if (k <= 1) {
+    return sum_over_boxes(d, lattice, region);
+  }
+  // Coordinate compression: the box interval ends cut every axis into at most 2k − 1 slabs; a
+  // cell of slabs is either inside a box or not, so the union is the sum of the covered cells.
+  // Cost (2k)^dim · k, kept below 2·10^7 operations.
+  const double cost = std::pow(2.0 * static_cast<double>(k), d.dim) * static_cast<double>(k);
+  if (cost > 2e7) {
+    return sum_over_boxes(d, lattice, region);
+  }
+  std::vector<std::array<Interval, 3>> boxes;
+  for (const Box& b : region.boxes) {
+    std::array<Interval, 3> iv{};
+    bool empty = false;
+    for (int a = 0; a < d.dim; ++a) {
+      iv[a] = axis_interval(lattice, a, b.lo[a], b.hi[a]);
+      const double n = iv[a].count();
+      if (n == 0) {
+        empty = true;
+      } else if (!std::isfinite(n)) {
+        return inf;
+      }
+    }
+    if (!empty) {
+      boxes.push_back(iv);
+    }
+  }
+  if (boxes.size() <= 1) {
+    double sum = 0;
+    for (const auto& iv : boxes) {
+      double p = 1;
+      for (int a = 0; a < d.dim; ++a) {
+        p *= iv[a].count();
+      }
+      sum += p;
+    }
+    return sum;
+  }
+  // Half-open slab ends [first, last + 1) per axis.
+  std::array<std::vector<double>, 3> cuts;
+  for (int a = 0; a < 3; ++a) {
+    if (a >= d.dim) {
+      cuts[a] = {0.0, 1.0};
+      continue;
+    }
+    for (const auto& iv : boxes) {
+      cuts[a].push_back(iv[a].first);
+      cuts[a].push_back(iv[a].last + 1);
+    }
+    std::sort(cuts[a].begin(), cuts[a].end());
+    cuts[a].erase(std::unique(cuts[a].begin(), cuts[a].end()), cuts[a].end());
+  }
+  auto covered = [&](const std::array<double, 3>& start) {
+    return std::any_of(boxes.begin(), boxes.end(), [&](const std::array<Interval, 3>& iv) {
+      for (int a = 0; a < d.dim; ++a) {
+        if (start[a] < iv[a].first || start[a] > iv[a].last) {
+          return false;
+        }
+      }
+      return true;
+    });
+  };
+  double total = 0;
+  for (std::size_t z = 0; z + 1 < cuts[2].size(); ++z) {
+    for (std::size_t y = 0; y + 1 < cuts[1].size(); ++y) {
+      for (std::size_t x = 0; x + 1 < cuts[0].size(); ++x) {
+        if (covered({cuts[0][x], cuts[1][y], cuts[2][z]})) {
+          total += (cuts[0][x + 1] - cuts[0][x]) * (d.dim > 1 ? cuts[1][y + 1] - cuts[1][y] : 1) *
+                   (d.dim > 2 ? cuts[2][z + 1] - cuts[2][z] : 1);
+        }
+      }
+    }
+  }
+  return total;
+}
+
+double bulk_family_size(const ModelDimension& d, const LatticeSpec& lattice, HorizonRule rule) {
+  const double m = lattice.horizon_factor;
+  const double ball = d.dim == 1   ? 2.0 * m
+                      : d.dim == 2 ? std::numbers::pi * m * m
+                                   : 4.0 / 3.0 * std::numbers::pi * m * m * m;
+  if (!(m <= 40)) {
+    // The lattice sum converges to the ball volume (in cells) as m grows; beyond m = 40 the
+    // difference is below 1 % and the sum would cost 81³ evaluations.
+    return ball;
+  }
+  const double reach = rule == HorizonRule::inclusive ? m * (1.0 + horizon_guard_band)
+                                                      : m * (1.0 - horizon_guard_band);
+  const double reach2 = reach * reach;
+  const auto r = static_cast<long long>(std::ceil(m)) + 1;
+  const long long rj = d.dim > 1 ? r : 0;
+  const long long rk = d.dim > 2 ? r : 0;
+  double count = 0;
+  for (long long k = -rk; k <= rk; ++k) {
+    for (long long j = -rj; j <= rj; ++j) {
+      for (long long i = -r; i <= r; ++i) {
+        const auto s2 = static_cast<double>(i * i + j * j + k * k);
+        if (s2 > 0 && (rule == HorizonRule::inclusive ? s2 <= reach2 : s2 < reach2)) {
+          count += 1;
+        }
+      }
+    }
+  }
+  // Jitter moves particles in and out of the horizon; on average the family follows the ball.
+  return lattice.position_jitter > 0 ? std::max(count, ball) : count;
+}
+
+ResourceEstimate estimate_resources(const ModelSpec& spec, const SolverSpec& solver) {
+  ResourceEstimate e;
+  const ModelDimension& d = spec.dimension;
+  Region all;
+  for (const BodySpec& b : spec.bodies) {
+    all.boxes.insert(all.boxes.end(), b.region.boxes.begin(), b.region.boxes.end());
+  }
+  const double n = lattice_points_in_union(d, spec.lattice, all);
+  e.particles = n;
+  e.bonds_per_particle =
+      std::min(bulk_family_size(d, spec.lattice, spec.horizon_rule), std::max(n - 1, 0.0));
+  e.bonds = 0.5 * n * e.bonds_per_particle;
+  const double directed = 2.0 * e.bonds;
+
+  // The terms of Model::memory_bytes(), in its order.
+  constexpr double dbl = sizeof(double);
+  const bool damage = spec.effects.damage;
+  const bool plasticity = spec.effects.plasticity;
+  const bool corrected = spec.surface_correction != SurfaceCorrection::none ||
+                         spec.volume_correction != VolumeCorrection::none;
+  const bool per_bond_field =
+      distinct_materials(spec) > 1 || corrected || spec.lattice.volume_variation > 0;
+  double per_particle = sizeof(Vec3) + dbl + 2 * sizeof(std::uint16_t); // particle set
+  per_particle += sizeof(std::size_t);                                  // CSR offsets
+  per_particle += dbl;                                                  // density
+  per_particle += spec.loads.empty() ? 0 : 3 * dbl;                     // external forces
+  per_particle += damage ? dbl : 0;                                     // damage index
+  per_particle += 9 * dbl;                                              // run state
+  double per_bond = sizeof(std::uint32_t) + dbl;                        // CSR neighbour and 1/|ξ|
+  if (per_bond_field) {
+    per_bond += dbl + (damage ? dbl : 0) + (plasticity ? dbl : 0);
+  }
+  per_bond += (damage ? 1 : 0) + (plasticity ? dbl : 0); // broken flags, plastic stretch
+  // Constraints: at most one per supported component of each particle in a support box.
+  double constrained = 0;
+  for (const SupportSpec& s : spec.supports) {
+    int components = 0;
+    for (int c = 0; c < 3; ++c) {
+      components += s.fixed[c] || s.prescribed[c] ? 1 : 0;
+    }
+    if (s.mirrors()) {
+      components = 3; // a mirror support moves all three with the body
+    }
+    double members = 0;
+    for (const Box& box : s.region.boxes) {
+      for (const Box& body : all.boxes) {
+        Box common;
+        for (int a = 0; a < 3; ++a) {
+          common.lo[a] = std::max(box.lo[a], body.lo[a]);
+          common.hi[a] = std::min(box.hi[a], body.hi[a]);
+        }
+        members += lattice_points_in_box(d, spec.lattice, common);
+      }
+    }
+    constrained += std::min(members, n) * components;
+  }
+  e.model_bytes = n * per_particle + directed * per_bond +
+                  constrained * static_cast<double>(sizeof(Constraint));
+
+  // Integrator vectors beyond the run state (3N doubles each, per-dof flags of one byte).
+  const double dof = 3 * n;
+  switch (solver.integrator) {
+  case IntegratorKind::adr:
+    e.integrator_bytes = dof * (3 * dbl + 1); // fictitious density, velocity, previous force
+    break;
+  case IntegratorKind::arkode: {
+    // [u; v] buffer, two scratch vectors, constraint rates and flags, plus SUNDIALS' own
+    // vectors of length 2·3N: one per stage and about five for the error test and bookkeeping.
+    // The largest offered table has 7 stages; its count is not needed to this precision.
+    const double stages = 7;
+    e.integrator_bytes = dof * (2 * dbl + 2 * dbl + dbl + 1) + 2 * dof * dbl * (stages + 5);
+    break;
+  }
+  default:
+    e.integrator_bytes = dof; // constrained-dof flags
+    break;
+  }
+
+  // Building: the cell list of the neighbour search (edge = horizon over the bounding box of the
+  // bodies, one size_t per cell plus two per particle), and the correction factors.
+  Vec3 lo{inf, inf, inf};
+  Vec3 hi{-inf, -inf, -inf};
+  for (const Box& b : all.boxes) {
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = std::min(lo[a], b.lo[a]);
+      hi[a] = std::max(hi[a], b.hi[a]);
+    }
+  }
+  double cells = 1;
+  const double delta = spec.lattice.horizon();
+  for (int a = 0; a < d.dim && !all.boxes.empty(); ++a) {
+    cells *= std::floor((hi[a] - lo[a]) / delta) + 1;
+  }
+  e.grid_bytes = (cells + 1) * static_cast<double>(sizeof(std::size_t)) +
+                 n * static_cast<double>(2 * sizeof(std::size_t) + sizeof(std::uint32_t));
+  // Corrections hold up to two per-bond vectors while they are computed (volume factors and the
+  // combined factors, or a reverse-bond index).
+  e.build_bytes = e.grid_bytes + (corrected ? 2 * directed * dbl : 0);
+  e.bytes = e.model_bytes + e.integrator_bytes + e.build_bytes;
+  if (std::isnan(e.bytes)) {
+    e.bytes = inf;
+  }
+  return e;
+}
+
+double parse_byte_size(std::string_view text) {
+  std::string_view t = text;
+  while (!t.empty() && std::isspace(static_cast<unsigned char>(t.front())) != 0) {
+    t.remove_prefix(1);
+  }
+  while (!t.empty() && std::isspace(static_cast<unsigned char>(t.back())) != 0) {
+    t.remove_suffix(1);
+  }
+  double value = 0;
+  const auto [end, ec] = std::from_chars(t.data(), t.data() + t.size(), value);
+  if (ec != std::errc{} || end == t.data() || !std::isfinite(value) || value < 0) {
+    throw std::invalid_argument(fmt::format("'{}' is not a size in bytes", text));
+  }
+  std::string suffix(end, t.data() + t.size());
+  std::transform(suffix.begin(), suffix.end(), suffix.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::toupper(c)); });
+  if (suffix.ends_with("IB")) {
+    suffix.erase(suffix.size() - 2);
+  } else if (suffix.size() > 1 && suffix.ends_with("B")) {
+    suffix.pop_back();
+  }
+  static constexpr std::string_view units = "KMGT";
+  if (suffix.empty() || suffix == "B") {
+    return value;
+  }
+  const auto pos = units.find(suffix);
+  if (suffix.size() != 1 || pos == std::string_view::npos) {
+    throw std::invalid_argument(
+        fmt::format("'{}' is not a size in bytes (suffixes: K, M, G, T)", text));
+  }
+  return value * std::pow(1024.0, static_cast<double>(pos + 1));
+}
+
+std::optional<MemoryBudget> available_memory() {
+  if (const char* limit = std::getenv("PD_MEMORY_LIMIT"); limit != nullptr && *limit != '\0') {
+    try {
+      return MemoryBudget{parse_byte_size(limit), "PD_MEMORY_LIMIT"};
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument(fmt::format("PD_MEMORY_LIMIT: {}", e.what()));
+    }
+  }
+  std::ifstream meminfo("/proc/meminfo");
+  std::string key;
+  double kib = 0;
+  std::string unit;
+  while (meminfo >> key >> kib) {
+    std::getline(meminfo, unit);
+    if (key == "MemAvailable:") {
+      return MemoryBudget{kib * 1024.0, "MemAvailable in /proc/meminfo"};
+    }
+  }
+  return std::nullopt;
+}
+
+std::string format_bytes(double bytes) {
+  if (!std::isfinite(bytes)) {
+    return "more than 10^308 B";
+  }
+  static constexpr std::array<std::string_view, 7> units{"B",   "KiB", "MiB", "GiB",
+                                                         "TiB", "PiB", "EiB"};
+  std::size_t u = 0;
+  while (bytes >= 1024 && u + 1 < units.size()) {
+    bytes /= 1024;
+    ++u;
+  }
+  if (u == 0) {
+    return fmt::format("{:.0f} B", bytes);
+  }
+  return bytes < 10 ? fmt::format("{:.1f} {}", bytes, units[u])
+                    : fmt::format("{:.3g} {}", bytes, units[u]);
+}
+
+} // namespace pd

@@ -1,0 +1,29 @@
+#include "libpd/kernel/stable_time_step.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace pd {
+
+std::vector<double> stable_time_step_per_particle(const Model& m) {
+  const std::size_t n = m.size();
+  std::vector<double> dt(n, no_limit);
+  for (std::size_t i = 0; i < n; ++i) {
+    // Σ_p V_p |C_ip| with |C| = c/|ξ|; bond_stiffness already carries c·V_p·corrections.
+    double sum = 0;
+    for (std::size_t k = m.family.offsets[i]; k < m.family.offsets[i + 1]; ++k) {
+      sum += bond_stiffness(m, k) * m.family.inverse_length[k];
+    }
+    if (sum > 0) {
+      dt[i] = std::sqrt(2.0 * m.density[i] / sum); // eq. 31
+    }
+  }
+  return dt;
+}
+
+double stable_time_step(const Model& m) {
+  const auto dt = stable_time_step_per_particle(m);
+  return dt.empty() ? no_limit : *std::min_element(dt.begin(), dt.end());
+}
+
+} // namespace pd

@@ -1,0 +1,37 @@
+#include "libpd/physics/effects.hpp"
+
+namespace pd {
+
+std::string to_string(StretchKind kind) {
+  switch (kind) {
+  case StretchKind::exact:
+    return "exact";
+  case StretchKind::modified:
+    return "modified";
+  case StretchKind::fast:
+    return "fast";
+  }
+  return "?";
+}
+
+std::vector<std::string> EffectSet::names() const {
+  std::vector<std::string> out{"stretch:" + to_string(stretch)};
+  if (damage) {
+    out.emplace_back("damage");
+  }
+  if (plasticity) {
+    out.emplace_back("plasticity");
+  }
+  if (per_bond_field) {
+    out.emplace_back("per-bond-field");
+  }
+  if (damping) {
+    out.emplace_back("damping");
+  }
+  if (body_force) {
+    out.emplace_back("body-force");
+  }
+  return out;
+}
+
+} // namespace pd

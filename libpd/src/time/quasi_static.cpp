@@ -1,0 +1,171 @@
+#include "libpd/time/quasi_static.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <fmt/format.h>
+
+namespace pd::quasi_static {
+
+/// Σ b_c V over the particles: the force the bonds exert on them (the support supplies −that).
+double bond_force(const Simulation& sim, const std::vector<std::uint32_t>& particles,
+                  int component) {
+  double sum = 0;
+  for (std::uint32_t i : particles) {
+    sum += sim.state().force[3 * i + static_cast<std::size_t>(component)] *
+           sim.model().particles.volume[i];
+  }
+  return sum;
+}
+
+/// Particles of a region (any body), as the model resolves supports.
+std::vector<std::uint32_t> particles_in(const Model& model, const Region& region) {
+  std::vector<std::uint32_t> out;
+  const double tol = 1e-6 * model.spec.lattice.spacing;
+  for (std::size_t i = 0; i < model.size(); ++i) {
+    if (region.contains(model.particles.position[i], model.spec.dimension.dim, tol)) {
+      out.push_back(static_cast<std::uint32_t>(i));
+    }
+  }
+  return out;
+}
+
+/// Broken bonds (each counted once).
+std::size_t broken_bonds(const Model& model) {
+  std::size_t n = 0;
+  for (std::uint8_t b : model.state.broken) {
+    n += b;
+  }
+  return n / 2;
+}
+
+Outcome run(Model& model, const SolverSpec& scene_solver, const InitialSpec& initial,
+            const Settings& settings, const IncrementObserver& after_increment) {
+  using clock = std::chrono::steady_clock;
+  const auto start = clock::now();
+  Outcome out;
+  std::vector<double> full(model.constraints.size());
+  for (std::size_t k = 0; k < full.size(); ++k) {
+    full[k] = model.constraints[k].value;
+    model.constraints[k].value = 0;
+  }
+  SolverSpec solver = scene_solver;
+  solver.integrator = IntegratorKind::adr;
+  solver.dt = 1.0;
+  solver.ramp_time = 0;
+  solver.end_time.reset();
+  solver.steady.enabled = false;
+  solver.max_steps = 1'000'000'000;
+  Simulation sim(model, solver, initial);
+
+  const std::size_t ndof = 3 * model.size();
+  std::vector<std::uint8_t> constrained(ndof, 0);
+  for (const Constraint& c : model.constraints) {
+    constrained[3 * c.particle + c.component] = 1;
+  }
+  // After a failure the reactions fall towards zero and a residual relative to them can never
+  // become small; the reference is therefore never below 5 % of the largest reactions so far.
+  double largest_reactions = 0;
+  auto residual = [&]() {
+    double free = 0, reactions = 0;
+    for (std::size_t d = 0; d < ndof; ++d) {
+      const double f = sim.state().force[d] * model.particles.volume[d / 3];
+      (constrained[d] ? reactions : free) += f * f;
+    }
+    largest_reactions = std::max(largest_reactions, std::sqrt(reactions));
+    const double reference = std::max(std::sqrt(reactions), 0.05 * largest_reactions);
+    return reference > 0 ? std::sqrt(free) / reference : std::sqrt(free);
+  };
+  auto displacement = [&]() {
+    std::vector<double> u(ndof);
+    for (std::size_t d = 0; d < ndof; ++d) {
+      u[d] = sim.state().position[d] - model.particles.position[d / 3][d % 3];
+    }
+    return u;
+  };
+  auto set_level = [&](double fraction) {
+    for (std::size_t k = 0; k < full.size(); ++k) {
+      model.constraints[k].value = fraction * full[k];
+    }
+  };
+
+  const int n = static_cast<int>(settings.levels.size());
+  auto level = [&](int k) {
+    return k > 0 ? settings.levels[static_cast<std::size_t>(k - 1)] : 0.0;
+  };
+  int inc = 1;
+  std::size_t it = 0;
+  std::vector<double> u_start = displacement(), u_previous_start = u_start;
+  bool extrapolate = false;
+  auto begin_increment = [&]() {
+    it = 0;
+    u_previous_start = u_start;
+    u_start = displacement();
+    if (extrapolate) {
+      std::vector<double> du(ndof);
+      for (std::size_t d = 0; d < ndof; ++d) {
+        du[d] = u_start[d] - u_previous_start[d];
+      }
+      // The constrained components are set by perturb's apply_constraints; move them first.
+      // Linear extrapolation in the load level: scale by the ratio of the level steps.
+      const double scale = (level(inc) - level(inc - 1)) / (level(inc - 1) - level(inc - 2));
+      for (double& v : du) {
+        v *= scale;
+      }
+      set_level(level(inc));
+      sim.perturb(du);
+    }
+  };
+  begin_increment();
+
+  auto observer = [&](const Simulation&) {
+    ++it;
+    ++out.iterations;
+    const std::size_t ramp = inc == 1 ? settings.first_ramp_iterations : 0;
+    if (it <= ramp) {
+      set_level(level(inc) * static_cast<double>(it) / static_cast<double>(ramp));
+      return true;
+    }
+    const bool check = it % settings.check_every == 0 || it >= settings.max_iterations;
+    if (!check) {
+      return true;
+    }
+    const double r = residual();
+    if (r > settings.residual_tolerance && it < settings.max_iterations) {
+      return true;
+    }
+    IncrementInfo info{inc, level(inc), it, r, r <= settings.residual_tolerance};
+    out.increments.push_back(info);
+    after_increment(sim, info);
+    const double wall = std::chrono::duration<double>(clock::now() - start).count();
+    if (settings.progress) {
+      fmt::print(stderr, "  increment {:>3}/{}: {:>5} iterations, residual {:.2e}, {:.0f} s\n", inc,
+                 n, it, r, wall);
+    }
+    if (inc == n) {
+      out.completed = true;
+      return false;
+    }
+    if (settings.done && settings.done(sim)) {
+      out.stop_reason = fmt::format("stopped by the case after increment {} of {}", inc, n);
+      return false;
+    }
+    if (settings.wall_limit_seconds > 0 && wall > settings.wall_limit_seconds) {
+      out.stop_reason = fmt::format("wall limit {:.0f} s reached after increment {} of {}",
+                                    settings.wall_limit_seconds, inc, n);
+      return false;
+    }
+    ++inc;
+    extrapolate = true;
+    begin_increment();
+    return true;
+  };
+  const RunResult result = sim.run(observer);
+  if (result.status == RunStatus::unstable) {
+    out.stop_reason = result.message;
+  }
+  out.wall_seconds = std::chrono::duration<double>(clock::now() - start).count();
+  return out;
+}
+
+} // namespace pd::quasi_static

@@ -1,0 +1,256 @@
+#include "libpd/time/simulation.hpp"
+
+#include "libpd/core/binary_state.hpp"
+#include "libpd/kernel/stable_time_step.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <fmt/format.h>
+#include <limits>
+
+namespace pd {
+
+std::string to_string(RunStatus status) {
+  switch (status) {
+  case RunStatus::end_time:
+    return "end_time";
+  case RunStatus::converged:
+    return "converged";
+  case RunStatus::max_steps:
+    return "max_steps";
+  case RunStatus::unstable:
+    return "unstable";
+  case RunStatus::interrupted:
+    return "interrupted";
+  }
+  return "?";
+}
+
+Simulation::Simulation(Model& model, const SolverSpec& solver, const InitialSpec& initial)
+    : model_(model), solver_(solver) {
+  const std::size_t n = model.size();
+  state_.position.resize(3 * n);
+  state_.velocity.resize(3 * n);
+  state_.force.assign(3 * n, 0.0);
+  Vec3 lo = model.particles.position.empty() ? Vec3{0, 0, 0} : model.particles.position[0];
+  Vec3 hi = lo;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vec3& x = model.particles.position[i];
+    for (int r = 0; r < 3; ++r) {
+      double u = 0;
+      for (int c = 0; c < 3; ++c) {
+        u += initial.displacement_gradient[r][c] * (x[c] - initial.about[c]);
+      }
+      state_.position[3 * i + r] = x[r] + u;
+      state_.velocity[3 * i + r] = initial.velocity[r];
+      lo[r] = std::min(lo[r], x[r]);
+      hi[r] = std::max(hi[r], x[r]);
+    }
+  }
+  ramp_.ramp_time = solver.ramp_time;
+  apply_constraints(model, ramp_, 0.0, state_.position.data(), state_.velocity.data());
+  constrained_.assign(3 * n, 0);
+  for (const Constraint& c : model.constraints) {
+    constrained_[3 * c.particle + c.component] = 1;
+  }
+
+  forces_ = make_force_evaluator(model);
+  dt_stable_ = stable_time_step(model);
+  IntegratorSettings is;
+  is.kind = solver.integrator;
+  is.damping = solver.damping;
+  is.ramp = ramp_;
+  is.arkode = solver.arkode;
+  is.cfl_fraction = solver.safety;
+  if (solver.integrator == IntegratorKind::arkode) {
+    // Adaptive ARKode: ERKStepSetStabilityFn gets the eq. 31 step scaled by the table's β/2.
+    is.stable_dt = dt_stable_ * make_integrator(is, model, *forces_)->stability_scale();
+  }
+  integrator_ = make_integrator(is, model, *forces_);
+  dt_ = solver.dt ? *solver.dt : solver.safety * dt_stable_ * integrator_->stability_scale();
+  if (!(dt_ > 0) || !std::isfinite(dt_)) {
+    throw std::runtime_error(
+        fmt::format("no usable time step: dt = {} (eq. 31 limit {}); does the model have bonds?",
+                    dt_, dt_stable_));
+  }
+  const double diagonal =
+      std::sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
+                (hi[2] - lo[2]) * (hi[2] - lo[2]));
+  const double blowup = solver.blowup_displacement > 0
+                            ? solver.blowup_displacement
+                            : std::max(diagonal, model.spec.lattice.spacing);
+  blowup_squared_ = blowup * blowup;
+}
+
+void Simulation::perturb(const std::vector<double>& du) {
+  for (std::size_t d = 0; d < state_.position.size() && d < du.size(); ++d) {
+    state_.position[d] += du[d];
+  }
+  apply_constraints(model_, ramp_, state_.time, state_.position.data(), state_.velocity.data());
+}
+
+double Simulation::kinetic_energy() const {
+  double ke = 0;
+  for (std::size_t i = 0; i < model_.size(); ++i) {
+    const double* v = &state_.velocity[3 * i];
+    ke += 0.5 * model_.density[i] * model_.particles.volume[i] *
+          (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+  }
+  return ke;
+}
+
+double Simulation::strain_energy() const {
+  return forces_->strain_energy(state_.position.data());
+}
+
+double Simulation::relative_residual() const {
+  // Free degrees of freedom carry the out-of-balance force (b + F b_ext)·V; constrained ones carry
+  // reactions, which normalise the residual when no load is applied.
+  const double load = ramp_.factor(state_.time);
+  const bool has_loads = !model_.external_force_density.empty();
+  double residual = 0, applied = 0, reactions = 0;
+  for (std::size_t i = 0; i < model_.size(); ++i) {
+    const double vol = model_.particles.volume[i];
+    for (std::size_t c = 0; c < 3; ++c) {
+      const std::size_t dof = 3 * i + c;
+      const double ext = has_loads ? load * model_.external_force_density[dof] * vol : 0.0;
+      const double f = state_.force[dof] * vol + ext;
+      if (constrained_[dof]) {
+        reactions += f * f;
+      } else {
+        residual += f * f;
+      }
+      applied += ext * ext;
+    }
+  }
+  const double reference = applied > 0 ? applied : reactions;
+  return reference > 0 ? std::sqrt(residual / reference) : std::sqrt(residual);
+}
+
+void Simulation::save(CheckpointWriter& w) const {
+  w.section("STAT");
+  w.f64(state_.time);
+  w.u64(state_.step);
+  w.u64(run_origin_);
+  w.f64(dt_);
+  w.doubles(state_.position);
+  w.doubles(state_.velocity);
+  w.doubles(state_.force);
+  w.section("BOND");
+  w.bytes(model_.state.broken);
+  w.doubles(model_.state.plastic_stretch);
+  w.doubles(model_.state.damage);
+  integrator_->save(w);
+}
+
+void Simulation::restore(CheckpointReader& r) {
+  r.section("STAT");
+  State st;
+  st.time = r.f64();
+  st.step = static_cast<std::size_t>(r.u64());
+  const auto origin = static_cast<std::size_t>(r.u64());
+  const double dt = r.f64();
+  if (dt != dt_) { // the fingerprint compares Δt too; this guards library callers
+    r.fail(fmt::format("Δt {} differs from this run's {}", dt, dt_));
+  }
+  const std::size_t ndof = state_.position.size();
+  st.position = r.doubles(ndof, "positions");
+  st.velocity = r.doubles(ndof, "velocities");
+  st.force = r.doubles(ndof, "forces");
+  r.section("BOND");
+  auto broken = r.bytes(model_.state.broken.size(), "broken-bond flags");
+  auto plastic = r.doubles(model_.state.plastic_stretch.size(), "plastic stretches");
+  auto damage = r.doubles(model_.state.damage.size(), "damage indices");
+  integrator_->restore(r);
+  // Nothing is changed until everything has been read: a bad checkpoint leaves the run as it was
+  // (except the integrator, which only restores after its own checks).
+  state_ = std::move(st);
+  model_.state.broken = std::move(broken);
+  model_.state.plastic_stretch = std::move(plastic);
+  model_.state.damage = std::move(damage);
+  run_origin_ = origin;
+  resumed_ = true;
+}
+
+RunResult Simulation::run(const Observer& observer) {
+  using clock = std::chrono::steady_clock;
+  const auto start = clock::now();
+  RunResult r;
+  r.dt = dt_;
+  r.dt_stable = dt_stable_;
+  r.residual = std::numeric_limits<double>::quiet_NaN();
+  // Clamped: end_time / dt beyond 2^64 (scene fuzzing: end_time 1e300) must not overflow the
+  // cast; max_steps stops such a run.
+  const double end_count = solver_.end_time ? std::ceil(*solver_.end_time / dt_ - 1e-9) : 0.0;
+  const std::size_t end_steps = end_count < 1.8e19 ? static_cast<std::size_t>(end_count)
+                                                   : std::numeric_limits<std::size_t>::max();
+  if (!resumed_) {
+    run_origin_ = state_.step;
+  }
+  resumed_ = false;
+  const std::size_t first_step = run_origin_;
+  for (;;) {
+    if (solver_.end_time && state_.step >= end_steps) {
+      r.status = RunStatus::end_time;
+      break;
+    }
+    if (state_.step - first_step >= solver_.max_steps) {
+      r.status = RunStatus::max_steps;
+      break;
+    }
+    const StepReport rep = integrator_->step(state_, dt_);
+    if (!(rep.max_displacement_squared <= blowup_squared_)) {
+      r.status = RunStatus::unstable;
+      const bool finite = std::isfinite(rep.max_displacement_squared);
+      r.message = fmt::format(
+          "run became unstable at step {} (t = {:.6g} s): {}. Δt = {:.6g} s; the stable Δt of "
+          "eq. 31 is {:.6g} s (Δt is {:.3g}× that). Lower solver.dt or solver.safety.",
+          state_.step, state_.time,
+          finite ? fmt::format("a displacement reached {:.3g} m, beyond the blow-up limit {:.3g} m",
+                               std::sqrt(rep.max_displacement_squared), std::sqrt(blowup_squared_))
+                 : std::string("non-finite positions"),
+          dt_, dt_stable_, dt_ / dt_stable_);
+      break;
+    }
+    if (solver_.steady.enabled && state_.step % solver_.steady.check_every == 0 &&
+        state_.time >= solver_.ramp_time) {
+      const double ke = kinetic_energy();
+      const double u = strain_energy();
+      r.residual = relative_residual();
+      if (ke <= solver_.steady.kinetic_tolerance * u &&
+          r.residual <= solver_.steady.force_tolerance) {
+        r.status = RunStatus::converged;
+        break;
+      }
+    }
+    if (observer && !observer(*this)) {
+      r.status = RunStatus::interrupted;
+      break;
+    }
+  }
+  r.steps = state_.step;
+  r.internal_steps = integrator_->internal_steps();
+  r.time = state_.time;
+  r.force_evaluations = integrator_->force_evaluations();
+  if (r.status != RunStatus::unstable) {
+    r.kinetic_energy = kinetic_energy();
+    r.strain_energy = strain_energy();
+    if (solver_.steady.enabled) {
+      r.residual = relative_residual();
+    }
+    // Positions can stay finite while the energies overflow (scene fuzzing: a density of 1e-308
+    // kg/m³ under ADR); never report such a run as a success.
+    if (!std::isfinite(r.kinetic_energy) || !std::isfinite(r.strain_energy)) {
+      r.status = RunStatus::unstable;
+      r.message =
+          fmt::format("run produced non-finite energies at step {} (kinetic {}, strain {}): "
+                      "the scene's values overflow double precision; check densities, "
+                      "moduli, loads and solver.dt",
+                      state_.step, r.kinetic_energy, r.strain_energy);
+    }
+  }
+  r.wall_seconds = std::chrono::duration<double>(clock::now() - start).count();
+  return r;
+}
+
+} // namespace pd
