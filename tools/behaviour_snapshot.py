@@ -13,7 +13,7 @@
     bytes themselves;
   * `pd stability --steps 200` on the bar.
 Numbers are kept exactly (JSON floats round-trip), and only fields that measure the machine rather
-than the model are dropped (wall times, rates, load, memory available, paths of the output).
+than the model are dropped (wall times, rates, load, memory available; absolute paths keep only their file name).
 `diff` compares two snapshots file by file and byte by byte.
 """
 from __future__ import annotations
@@ -49,6 +49,8 @@ def normalise(value):
         return {k: normalise(v) for k, v in value.items() if not machine_field(k)}
     if isinstance(value, list):
         return [normalise(v) for v in value]
+    if isinstance(value, str) and value.startswith("/"):
+        return Path(value).name  # where the tree or the snapshot lives is not a result
     return value
 
 
@@ -153,6 +155,10 @@ def take(build: Path, out: Path) -> int:
     return 1 if failures else 0
 
 
+def canonical(path: Path) -> str:
+    return json.dumps(normalise(json.loads(path.read_text())), indent=1, sort_keys=True)
+
+
 def diff(old: Path, new: Path) -> int:
     names = sorted({p.name for p in old.glob("*.json")} | {p.name for p in new.glob("*.json")})
     bad = 0
@@ -161,7 +167,7 @@ def diff(old: Path, new: Path) -> int:
         if not a.exists() or not b.exists():
             print(f"only in one snapshot: {name}")
             bad += 1
-        elif a.read_bytes() != b.read_bytes():
+        elif canonical(a) != canonical(b):
             print(f"differs: {name}")
             subprocess.run(["diff", str(a), str(b)], check=False)
             bad += 1
