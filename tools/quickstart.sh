@@ -21,7 +21,7 @@ packages=(
   libeigen3-dev libyaml-cpp-dev libcli11-dev libfmt-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libsundials-dev libdeal.ii-dev
-  python3 python3-matplotlib chromium
+  python3 python3-matplotlib python3-yaml chromium
 )
 if [[ $mode == report ]]; then
   packages+=(lammps)
