@@ -26,15 +26,17 @@ import sys
 # Debian's python3-matplotlib lives in /usr/bin/python3's site-packages; a python3 from pyenv or a
 # venv earlier on PATH does not see it.  Re-run with the system interpreter rather than fail.
 try:
-    if "--compare" not in sys.argv:   # --compare needs no matplotlib: keep it fast
+    if "--compare" not in sys.argv:   # --compare needs neither: keep it fast
         import matplotlib  # noqa: F401
+        import yaml  # noqa: F401
 except ImportError:
     if os.path.exists("/usr/bin/python3") and os.path.realpath(sys.executable) != os.path.realpath("/usr/bin/python3") \
             and not os.environ.get("PD_REPORT_REEXEC"):
         os.environ["PD_REPORT_REEXEC"] = "1"
         os.execv("/usr/bin/python3", ["/usr/bin/python3", *sys.argv])
     if "--compare" not in sys.argv:
-        sys.exit("pd_report.py: error: matplotlib is missing (apt-get install python3-matplotlib)")
+        sys.exit("pd_report.py: error: matplotlib or PyYAML is missing "
+                 "(apt-get install python3-matplotlib python3-yaml)")
 
 import argparse  # noqa: E402
 import fnmatch  # noqa: E402
