@@ -26,15 +26,17 @@ import sys
 # Debian's python3-matplotlib lives in /usr/bin/python3's site-packages; a python3 from pyenv or a
 # venv earlier on PATH does not see it.  Re-run with the system interpreter rather than fail.
 try:
-    if "--compare" not in sys.argv:   # --compare needs no matplotlib: keep it fast
+    if "--compare" not in sys.argv:   # --compare needs neither: keep it fast
         import matplotlib  # noqa: F401
+        import yaml  # noqa: F401
 except ImportError:
     if os.path.exists("/usr/bin/python3") and os.path.realpath(sys.executable) != os.path.realpath("/usr/bin/python3") \
             and not os.environ.get("PD_REPORT_REEXEC"):
         os.environ["PD_REPORT_REEXEC"] = "1"
         os.execv("/usr/bin/python3", ["/usr/bin/python3", *sys.argv])
     if "--compare" not in sys.argv:
-        sys.exit("pd_report.py: error: matplotlib is missing (apt-get install python3-matplotlib)")
+        sys.exit("pd_report.py: error: matplotlib or PyYAML is missing "
+                 "(apt-get install python3-matplotlib python3-yaml)")
 
 import argparse  # noqa: E402
 import fnmatch  # noqa: E402
@@ -48,14 +50,15 @@ from pathlib import Path  # noqa: E402
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 
+from pdreport import cases as case_files  # noqa: E402
 from pdreport import compare as cmp  # noqa: E402
 from pdreport import stages as S  # noqa: E402
 
 ROOT = HERE.parent
 
-# What the default report runs (≤ 10 min fresh on 2 cores) and what --full adds (≤ 60 min).
+# What the default report runs (≤ 10 min fresh on 2 cores) and what --full adds (≤ 60 min; the
+# sweeps of every case file with a `sweep:` section).
 DEFAULT_SWEEP_CASES = ["clamped-beam"]   # reduced: first value of each knob list
-FULL_SWEEP_CASES = ["clamped-beam", "cantilever", "plate-3clamped"]
 DEFAULT_STABILITY_SCENES = ["bar-vibration.yaml"]
 FULL_STABILITY_SCENES = ["bar-vibration.yaml", "clamped-beam.yaml", "plate-3clamped.yaml"]
 
@@ -69,7 +72,6 @@ def fmt_s(s: float) -> str:
 
 
 def build_stages(ctx: S.Ctx, records: dict[str, dict]) -> list[S.Stage]:
-    stages: list[S.Stage] = [S.fem_stage(ctx, p) for p in S.FE_PROBLEMS]
     t0 = time.time()
     try:
         cases = S.list_cases(ctx)
@@ -81,12 +83,15 @@ def build_stages(ctx: S.Ctx, records: dict[str, dict]) -> list[S.Stage]:
         cases = []
     CASES[:] = [list(c) for c in cases]
     listed = {c for c, _ in cases}
+    structures = case_files.load()
+    order = case_files.in_listed_order(structures, [c for c, _ in cases])
+    stages: list[S.Stage] = [S.fem_stage(ctx, p, cs) for p, cs in S.fe_problems(structures, order).items()]
     # `CASE-sweep` cases are the accuracy-vs-time sweeps: they go to the sweep stages.
     # Cases that `pd verify --list` itself calls "(slow)" run only with --full; the summary table
     # lists them as not run, with the reason.
     stages += [S.verify_stage(ctx, c, summary) for c, summary in cases
                if not c.endswith("-sweep") and (ctx.full or "(slow)" not in summary)]
-    sweep_cases = FULL_SWEEP_CASES if ctx.full else DEFAULT_SWEEP_CASES
+    sweep_cases = [c for c in order if structures[c].has_sweep] if ctx.full else DEFAULT_SWEEP_CASES
     stages += [S.sweep_stage(ctx, c, listed) for c in sweep_cases]
     stages.append(S.stability_stage(ctx, FULL_STABILITY_SCENES if ctx.full else DEFAULT_STABILITY_SCENES))
     stages += [S.compare_stage(ctx, "dynamic"), S.compare_stage(ctx, "quasistatic")]

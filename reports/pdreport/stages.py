@@ -20,6 +20,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
 
+from .cases import Case
+
 
 class StageFailed(Exception):
     """A stage could not produce its data; the message is shown in the page."""
@@ -216,22 +218,20 @@ def drop_bulky(path: Path) -> None:
 
 # ---- FE references -----------------------------------------------------------------------------
 
-FE_PROBLEMS = {
-    "clamped-beam": ["clamped-beam-centreline.csv"],
-    "cantilever": ["cantilever-centreline.csv"],
-    "plate-3clamped": ["plate-3clamped-perpendicular.csv", "plate-3clamped-free_edge.csv"],
-}
-FE_RUN_CSV = {  # run output name -> gold name
-    "centreline.csv": "{p}-centreline.csv",
-    "centre_line_x2.csv": "{p}-perpendicular.csv",
-    "free_edge_y3.csv": "{p}-free_edge.csv",
-}
+def fe_problems(cases: dict[str, Case], order: list[str]) -> dict[str, list[Case]]:
+    """The deal.II reference problems the structure cases compare with (their `fe_reference`),
+    each with the cases that use it."""
+    out: dict[str, list[Case]] = {}
+    for name in order:
+        out.setdefault(cases[name].fe_reference, []).append(cases[name])
+    return out
 
 
-def fem_stage(ctx: Ctx, problem: str) -> Stage:
+def fem_stage(ctx: Ctx, problem: str, cases: list[Case]) -> Stage:
     prm = ctx.root / "fem_reference" / "prm" / f"{problem}.prm"
     gold = ctx.root / "fem_reference" / "reference" / f"{problem}.json"
     work = ctx.work / "fem" / problem
+    fe_lines = [line for c in cases for line in c.lines]
     exe = ctx.bin / "pd-fem"
     cmd = [str(exe), str(prm), "-o", str(work), "--check", str(gold)]
     if not ctx.full:
@@ -246,13 +246,13 @@ def fem_stage(ctx: Ctx, problem: str) -> Stage:
         gold_summary = json.loads(gold.read_text())
         lines = {}
         if ctx.full:
-            src = {name: work / name for name in FE_RUN_CSV if (work / name).exists()}
-            for name, path in src.items():
-                lines[FE_RUN_CSV[name].format(p=problem)] = read_line_csv(path)
+            for line in fe_lines:
+                if line.fe_run_csv and (work / line.fe_run_csv).exists():
+                    lines[line.fe_csv] = read_line_csv(work / line.fe_run_csv)
             used = summary_run
         else:
-            for name in FE_PROBLEMS[problem]:
-                lines[name] = read_line_csv(gold.parent / name)
+            for line in fe_lines:
+                lines[line.fe_csv] = read_line_csv(gold.parent / line.fe_csv)
             used = gold_summary
         tail = [l for l in (p.stdout + p.stderr).splitlines() if "CHECK" in l or "check" in l]
         result = {
@@ -276,7 +276,7 @@ def fem_stage(ctx: Ctx, problem: str) -> Stage:
         return result
 
     return Stage(f"fem:{problem}", "fem", f"deal.II reference {problem}", [cmd],
-                 [exe, prm, gold] + [gold.parent / n for n in FE_PROBLEMS[problem]], fn,
+                 [exe, prm, gold] + [gold.parent / line.fe_csv for line in fe_lines] + [c.path for c in cases], fn,
                  default_seconds=(90 if problem.startswith("plate") else 15) if ctx.full
                  else (15 if problem.startswith("plate") else 5))
 
