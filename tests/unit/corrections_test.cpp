@@ -137,7 +137,7 @@ TEST(VolumeCorrection, ExactPerBondOnLatticeAndJitter) {
   pd::ModelSpec spec = block_spec(3, 3.015, {8, 8, 8});
   spec.volume_correction = pd::VolumeCorrection::exact;
   const Built b = build(spec);
-  const auto f = pd::volume_correction_factors(spec, b.particles, b.family);
+  const auto f = pd::volume_correction_factors(spec.corrections(), b.particles, b.family);
   // Every bond's factor is the exact fraction of its own lattice offset.
   for (std::size_t i = 0; i < b.particles.size(); i += 37) {
     for (std::size_t k = b.family.offsets[i]; k < b.family.offsets[i + 1]; ++k) {
@@ -152,7 +152,7 @@ TEST(VolumeCorrection, ExactPerBondOnLatticeAndJitter) {
   // Jittered particles: computed per bond, still symmetric (point reflection of the geometry).
   spec.lattice.position_jitter = 0.1;
   const Built bj = build(spec);
-  const auto fj = pd::volume_correction_factors(spec, bj.particles, bj.family);
+  const auto fj = pd::volume_correction_factors(spec.corrections(), bj.particles, bj.family);
   const auto rev = pd::reverse_bond_index(bj.family);
   for (std::size_t k = 0; k < fj.size(); ++k) {
     ASSERT_NEAR(fj[k], fj[rev[k]], 1e-9);
@@ -176,11 +176,11 @@ TEST(VolumeCorrection, BulkFamilyVolumeIsTheLatticeSum) {
       }
     }
   }
-  EXPECT_NEAR(pd::bulk_family_volume(spec), none, 1e-9);
+  EXPECT_NEAR(pd::bulk_family_volume(spec.corrections()), none, 1e-9);
   spec.volume_correction = pd::VolumeCorrection::linear;
-  EXPECT_NEAR(pd::bulk_family_volume(spec), linear, 1e-9);
+  EXPECT_NEAR(pd::bulk_family_volume(spec.corrections()), linear, 1e-9);
   spec.volume_correction = pd::VolumeCorrection::exact;
-  EXPECT_NEAR(pd::bulk_family_volume(spec), exact, 1e-9);
+  EXPECT_NEAR(pd::bulk_family_volume(spec.corrections()), exact, 1e-9);
 }
 
 // ---- surface corrections ----------------------------------------------------------------------
@@ -194,7 +194,7 @@ TEST_P(SurfaceCorrection, SymmetricAndPositive) {
     spec.surface_correction = GetParam();
     spec.volume_correction = vc;
     const Built b = build(spec);
-    const auto f = pd::bond_correction_factors(spec, b.particles, b.family);
+    const auto f = pd::bond_correction_factors(spec.corrections(), b.particles, b.family);
     const auto rev = pd::reverse_bond_index(b.family);
     for (std::size_t k = 0; k < f.size(); ++k) {
       ASSERT_NEAR(f[k], f[rev[k]], 1e-12 * f[k]) << "bond " << k;
@@ -221,7 +221,7 @@ struct BulkCase {
 TEST(SurfaceCorrectionBulk, VolumeMethodGivesOne) {
   BulkCase c;
   c.spec.surface_correction = pd::SurfaceCorrection::volume;
-  const auto f = pd::bond_correction_factors(c.spec, c.b.particles, c.b.family);
+  const auto f = pd::bond_correction_factors(c.spec.corrections(), c.b.particles, c.b.family);
   for (std::size_t k = c.b.family.offsets[c.centre]; k < c.b.family.offsets[c.centre + 1]; ++k) {
     EXPECT_NEAR(f[k], 1.0, 1e-12);
   }
@@ -245,13 +245,13 @@ TEST(SurfaceCorrectionBulk, EnergyAndMacekSillingMatchLatticeSums) {
   const double gx = pi * 16.0 / 5.0 / sx, g = pi * 16.0 / s;
   BulkCase c;
   c.spec.surface_correction = pd::SurfaceCorrection::energy;
-  auto f = pd::bond_correction_factors(c.spec, c.b.particles, c.b.family);
+  auto f = pd::bond_correction_factors(c.spec.corrections(), c.b.particles, c.b.family);
   for (std::size_t k = c.b.family.offsets[c.centre]; k < c.b.family.offsets[c.centre + 1]; ++k) {
     // Equal factors along x, y, z (cubic lattice): the ellipsoid is a sphere, g_ij = g_x.
     EXPECT_NEAR(f[k], gx, 1e-12);
   }
   c.spec.surface_correction = pd::SurfaceCorrection::macek_silling;
-  f = pd::bond_correction_factors(c.spec, c.b.particles, c.b.family);
+  f = pd::bond_correction_factors(c.spec.corrections(), c.b.particles, c.b.family);
   for (std::size_t k = c.b.family.offsets[c.centre]; k < c.b.family.offsets[c.centre + 1]; ++k) {
     EXPECT_NEAR(f[k], g, 1e-12);
   }
@@ -264,7 +264,7 @@ TEST(SurfaceCorrection1D, EnergyFactorsOfABar) {
   pd::ModelSpec spec = block_spec(1, 3.0, {20, 0, 0});
   spec.surface_correction = pd::SurfaceCorrection::energy;
   const Built b = build(spec);
-  const auto f = pd::bond_correction_factors(spec, b.particles, b.family);
+  const auto f = pd::bond_correction_factors(spec.corrections(), b.particles, b.family);
   const std::size_t end = particle_at(b.particles, {0.5, 0, 0});
   const std::size_t second = particle_at(b.particles, {1.5, 0, 0});
   for (std::size_t k = b.family.offsets[end]; k < b.family.offsets[end + 1]; ++k) {
@@ -281,7 +281,7 @@ TEST(SurfaceCorrection1D, EnergyFactorsOfABar) {
   spec.lattice.horizon_factor = 3.015;
   spec.volume_correction = pd::VolumeCorrection::linear;
   const Built b2 = build(spec);
-  const auto f2 = pd::bond_correction_factors(spec, b2.particles, b2.family);
+  const auto f2 = pd::bond_correction_factors(spec.corrections(), b2.particles, b2.family);
   const std::size_t mid2 = particle_at(b2.particles, {10.5, 0, 0});
   for (std::size_t k = b2.family.offsets[mid2]; k < b2.family.offsets[mid2 + 1]; ++k) {
     EXPECT_NEAR(f2[k],
@@ -299,9 +299,9 @@ TEST(SurfaceCorrection2D, EllipsoidalCombination) {
   pd::ModelSpec spec = block_spec(2, 3.0, {12, 12, 0});
   spec.surface_correction = pd::SurfaceCorrection::energy;
   const Built b = build(spec);
-  const auto vf = pd::volume_correction_factors(spec, b.particles, b.family);
-  const auto g = pd::energy_surface_factors(spec, b.particles, b.family, vf);
-  const auto f = pd::bond_correction_factors(spec, b.particles, b.family);
+  const auto vf = pd::volume_correction_factors(spec.corrections(), b.particles, b.family);
+  const auto g = pd::energy_surface_factors(spec.corrections(), b.particles, b.family, vf);
+  const auto f = pd::bond_correction_factors(spec.corrections(), b.particles, b.family);
   const std::size_t i = particle_at(b.particles, {0.5, 6.5, 0});
   EXPECT_GT(g[i][0], g[i][1]);
   for (std::size_t k = b.family.offsets[i]; k < b.family.offsets[i + 1]; ++k) {
@@ -341,7 +341,8 @@ TEST(SurfaceCorrection, FoldedIntoTheBondStiffness) {
   spec.volume_correction = pd::VolumeCorrection::exact;
   const pd::Model corrected = pd::build_model(spec);
   ASSERT_TRUE(corrected.field.per_bond());
-  const auto f = pd::bond_correction_factors(spec, corrected.particles, corrected.family);
+  const auto f =
+      pd::bond_correction_factors(spec.corrections(), corrected.particles, corrected.family);
   for (std::size_t k = 0; k < f.size(); ++k) {
     ASSERT_NEAR(corrected.field.bond_stiffness[k], plain.field.stiffness * f[k],
                 1e-12 * plain.field.stiffness * f[k]);
@@ -401,12 +402,12 @@ TEST(TensorCorrection, BulkFactorIsOneWithMomentWeights) {
     spec.volume_correction = pd::VolumeCorrection::moment;
     const Built b = build(spec);
     const std::size_t centre = particle_at(b.particles, {7.5, 7.5, 7.5});
-    const auto vf = pd::volume_correction_factors(spec, b.particles, b.family);
-    const auto g = pd::tensor_surface_factors(spec, b.particles, b.family, vf);
+    const auto vf = pd::volume_correction_factors(spec.corrections(), b.particles, b.family);
+    const auto g = pd::tensor_surface_factors(spec.corrections(), b.particles, b.family, vf);
     for (std::size_t d = 0; d < 3; ++d) {
       EXPECT_NEAR(g[centre][d], 1.0, 1e-12) << "m " << m << " axis " << d;
     }
-    const auto f = pd::bond_correction_factors(spec, b.particles, b.family);
+    const auto f = pd::bond_correction_factors(spec.corrections(), b.particles, b.family);
     for (std::size_t k = b.family.offsets[centre]; k < b.family.offsets[centre + 1]; ++k) {
       ASSERT_NEAR(f[k], vf[k], 1e-12);
     }
@@ -415,8 +416,8 @@ TEST(TensorCorrection, BulkFactorIsOneWithMomentWeights) {
   pd::ModelSpec spec = block_spec(2, 3.015, {14, 14, 0});
   spec.volume_correction = pd::VolumeCorrection::moment;
   const Built b = build(spec);
-  const auto vf = pd::volume_correction_factors(spec, b.particles, b.family);
-  const auto g = pd::tensor_surface_factors(spec, b.particles, b.family, vf);
+  const auto vf = pd::volume_correction_factors(spec.corrections(), b.particles, b.family);
+  const auto g = pd::tensor_surface_factors(spec.corrections(), b.particles, b.family, vf);
   const std::size_t centre = particle_at(b.particles, {7.5, 7.5, 0});
   EXPECT_NEAR(g[centre][0], 1.0, 1e-12);
   EXPECT_NEAR(g[centre][1], 1.0, 1e-12);
@@ -432,7 +433,7 @@ TEST(TensorCorrection, OwnHalfStoresTheUniaxialStressEnergy) {
   spec.surface_correction = pd::SurfaceCorrection::tensor;
   const Built b = build(spec);
   const std::vector<double> ones(b.family.directed_bond_count(), 1.0);
-  const auto g = pd::tensor_surface_factors(spec, b.particles, b.family, ones);
+  const auto g = pd::tensor_surface_factors(spec.corrections(), b.particles, b.family, ones);
   const double E = 200e9, eps = 1e-7, nu = 0.25;
   const double c = pd::micromodulus(spec.dimension, E, spec.lattice.horizon());
   for (std::size_t d = 0; d < 3; ++d) {
@@ -460,7 +461,7 @@ TEST(TensorCorrection, BarFactorsInClosedForm) {
   pd::ModelSpec spec = block_spec(1, 3.0, {20, 0, 0});
   spec.surface_correction = pd::SurfaceCorrection::tensor;
   const Built b = build(spec);
-  const auto f = pd::bond_correction_factors(spec, b.particles, b.family);
+  const auto f = pd::bond_correction_factors(spec.corrections(), b.particles, b.family);
   const std::size_t end = particle_at(b.particles, {0.5, 0, 0});
   const std::size_t second = particle_at(b.particles, {1.5, 0, 0});
   bool seen = false;
@@ -485,8 +486,8 @@ TEST(TensorCorrection, MirrorSymmetricAndStifferAcrossTheFace) {
   spec.surface_correction = pd::SurfaceCorrection::tensor;
   spec.volume_correction = pd::VolumeCorrection::moment;
   const Built b = build(spec);
-  const auto vf = pd::volume_correction_factors(spec, b.particles, b.family);
-  const auto g = pd::tensor_surface_factors(spec, b.particles, b.family, vf);
+  const auto vf = pd::volume_correction_factors(spec.corrections(), b.particles, b.family);
+  const auto g = pd::tensor_surface_factors(spec.corrections(), b.particles, b.family, vf);
   const std::size_t face = particle_at(b.particles, {0.5, 2.5, 3.5});
   const std::size_t mirror = particle_at(b.particles, {8.5, 2.5, 3.5});
   const std::size_t swapped = particle_at(b.particles, {0.5, 3.5, 2.5}); // y ↔ z image
@@ -497,7 +498,7 @@ TEST(TensorCorrection, MirrorSymmetricAndStifferAcrossTheFace) {
   EXPECT_NEAR(g[face][2], g[swapped][1], 1e-12);
   EXPECT_GT(g[face][0], g[face][1]);
   EXPECT_GT(g[face][1], 1.0);
-  const auto f = pd::bond_correction_factors(spec, b.particles, b.family);
+  const auto f = pd::bond_correction_factors(spec.corrections(), b.particles, b.family);
   const auto rev = pd::reverse_bond_index(b.family);
   for (std::size_t k = b.family.offsets[face]; k < b.family.offsets[face + 1]; ++k) {
     const std::size_t j = b.family.neighbour[k];
@@ -515,13 +516,13 @@ TEST(TensorCorrection, OneLayerPlateKeepsPositiveFactors) {
   spec.surface_correction = pd::SurfaceCorrection::tensor;
   const Built b = build(spec);
   const std::vector<double> ones(b.family.directed_bond_count(), 1.0);
-  const auto g = pd::tensor_surface_factors(spec, b.particles, b.family, ones);
+  const auto g = pd::tensor_surface_factors(spec.corrections(), b.particles, b.family, ones);
   for (const auto& gi : g) {
     EXPECT_EQ(gi[2], 1.0);
     EXPECT_TRUE(std::isfinite(gi[0]) && gi[0] > 1.0);
     EXPECT_TRUE(std::isfinite(gi[1]) && gi[1] > 1.0);
   }
-  for (const double f : pd::bond_correction_factors(spec, b.particles, b.family)) {
+  for (const double f : pd::bond_correction_factors(spec.corrections(), b.particles, b.family)) {
     ASSERT_TRUE(std::isfinite(f) && f > 0);
   }
 }
@@ -580,7 +581,7 @@ TEST(VolumeCorrection, MomentWeightsReproduceContinuumMoments) {
       spec.lattice.spacing = 0.1;
       spec.lattice.horizon_factor = m;
       spec.volume_correction = pd::VolumeCorrection::moment;
-      const pd::MomentWeights w = pd::moment_matched_weights(spec);
+      const pd::MomentWeights w = pd::moment_matched_weights(spec.corrections());
       const double lambda = spec.lattice.spacing, delta = m * lambda;
       const double v = dim == 3 ? lambda * lambda * lambda : lambda * lambda;
       double s4 = 0, s22 = 0, wmin = 1e9, wmax = -1e9;

@@ -123,6 +123,7 @@ Json to_json(const Stats& s) {
 Json exact_truncation(double m) {
   const double delta = m; // λ = 1
   const auto reach = static_cast<long long>(std::ceil(m + 1.0));
+  const InHorizon in_family(delta, HorizonRule::inclusive);
   double vol_family = 0, vol_all = 1.0 * exact_volume_fraction(3, {0, 0, 0}, delta, 1.0);
   double e_family = 0, e_all = 0, e_none = 0;
   for (long long k = -reach; k <= reach; ++k) {
@@ -138,7 +139,7 @@ Json exact_truncation(double m) {
         const double w = n * n * n * n * r;
         vol_all += f;
         e_all += f * w;
-        if (r <= delta * (1 + horizon_guard_band)) {
+        if (in_family(dot(xi, xi))) {
           vol_family += f;
           e_family += f * w;
           e_none += w;

@@ -98,17 +98,13 @@ BondFamily build_bond_family(const std::vector<Vec3>& x, int dim, double horizon
   if (x.size() > std::numeric_limits<std::uint32_t>::max()) {
     throw std::runtime_error("neighbour search: more than 2^32 particles");
   }
-  const double reach = rule == HorizonRule::inclusive ? horizon * (1.0 + horizon_guard_band)
-                                                      : horizon * (1.0 - horizon_guard_band);
-  const double reach2 = reach * reach;
-  const bool inclusive = rule == HorizonRule::inclusive;
-  const CellList cl = make_cell_list(x, dim, reach);
+  const InHorizon inside(horizon, rule);
+  const CellList cl = make_cell_list(x, dim, inside.reach);
   const auto n = static_cast<std::ptrdiff_t>(x.size());
 
   auto in_horizon = [&](std::size_t i, std::size_t j) {
     const double d0 = x[j][0] - x[i][0], d1 = x[j][1] - x[i][1], d2 = x[j][2] - x[i][2];
-    const double r2 = d0 * d0 + d1 * d1 + d2 * d2;
-    return inclusive ? r2 <= reach2 : r2 < reach2;
+    return inside(d0 * d0 + d1 * d1 + d2 * d2);
   };
 
   BondFamily f;

@@ -127,9 +127,10 @@ std::uint64_t offset_key(std::array<long long, 3> o) {
          (static_cast<std::uint64_t>(o[2]) << 42);
 }
 
-bool inside_horizon(double r, double horizon, HorizonRule rule) {
-  return rule == HorizonRule::inclusive ? r <= horizon * (1.0 + horizon_guard_band)
-                                        : r < horizon * (1.0 - horizon_guard_band);
+/// Bond vector λ·o of a lattice offset o.
+Vec3 offset_vector(const std::array<long long, 3>& o, double lambda) {
+  return {lambda * static_cast<double>(o[0]), lambda * static_cast<double>(o[1]),
+          lambda * static_cast<double>(o[2])};
 }
 
 Vec3 bond_vector(const ParticleSet& p, std::size_t i, std::size_t j) {
@@ -228,30 +229,19 @@ double volume_fraction(VolumeCorrection vc, double r, double horizon, double spa
 
 /// Family volume of a particle in the bulk of the same lattice: Σ over lattice offsets within the
 /// horizon of V·(volume fraction). Used as V0 by the `volume` surface correction.
-double bulk_family_volume(const ModelSpec& spec) {
+double bulk_family_volume(const CorrectionSpec& spec) {
   const double lambda = spec.lattice.spacing;
   const double delta = spec.lattice.horizon();
-  const auto m = static_cast<long long>(std::ceil(spec.lattice.horizon_factor)) + 1;
   const int dim = spec.dimension.dim;
   const double v = cell_volume(spec.dimension, lambda);
   double sum = 0;
-  for (long long k = (dim > 2 ? -m : 0); k <= (dim > 2 ? m : 0); ++k) {
-    for (long long j = (dim > 1 ? -m : 0); j <= (dim > 1 ? m : 0); ++j) {
-      for (long long i = -m; i <= m; ++i) {
-        if (i == 0 && j == 0 && k == 0) {
-          continue;
-        }
-        const Vec3 xi{lambda * static_cast<double>(i), lambda * static_cast<double>(j),
-                      lambda * static_cast<double>(k)};
-        const double r = norm(xi);
-        if (inside_horizon(r, delta, spec.horizon_rule)) {
-          sum += v * (spec.volume_correction == VolumeCorrection::exact
-                          ? exact_volume_fraction(dim, xi, delta, lambda)
-                          : volume_fraction(spec.volume_correction, r, delta, lambda));
-        }
-      }
-    }
-  }
+  for_each_offset_within(
+      spec.lattice.horizon_factor, dim, spec.horizon_rule, [&](const std::array<long long, 3>& o) {
+        const Vec3 xi = offset_vector(o, lambda);
+        sum += v * (spec.volume_correction == VolumeCorrection::exact
+                        ? exact_volume_fraction(dim, xi, delta, lambda)
+                        : volume_fraction(spec.volume_correction, norm(xi), delta, lambda));
+      });
   return sum;
 }
 
@@ -331,7 +321,7 @@ std::array<const char*, all_volume_corrections.size()> volume_correction_names()
   return names;
 }
 
-MomentWeights moment_matched_weights(const ModelSpec& spec) {
+MomentWeights moment_matched_weights(const CorrectionSpec& spec) {
   // For a homogeneous strain ε the bond-based energy density is W = (c/4) Σ_j w_j V |ξ_j|
   // (n_j·ε·n_j)², so the elastic tensor is (c/2) Σ_j w_j V |ξ_j| n⊗n⊗n⊗n. The continuum integral
   // of the same expression is isotropic; on a cubic lattice the sum has cubic symmetry with two
@@ -340,28 +330,20 @@ MomentWeights moment_matched_weights(const ModelSpec& spec) {
   // the continuum's Young's modulus and ν = 1/4 (1/3 in plane stress) for any homogeneous strain.
   const double lambda = spec.lattice.spacing;
   const double delta = spec.lattice.horizon();
-  const auto m = static_cast<long long>(std::ceil(spec.lattice.horizon_factor)) + 1;
   const int dim = spec.dimension.dim;
   const double v = cell_volume(spec.dimension, lambda);
   double a00 = 0, a01 = 0, a10 = 0, a11 = 0;
-  for (long long k = (dim > 2 ? -m : 0); k <= (dim > 2 ? m : 0); ++k) {
-    for (long long j = (dim > 1 ? -m : 0); j <= (dim > 1 ? m : 0); ++j) {
-      for (long long i = -m; i <= m; ++i) {
-        const Vec3 xi{lambda * static_cast<double>(i), lambda * static_cast<double>(j),
-                      lambda * static_cast<double>(k)};
-        const double r = norm(xi);
-        if (r == 0 || !inside_horizon(r, delta, spec.horizon_rule)) {
-          continue;
-        }
-        const double nx = xi[0] / r, ny = xi[1] / r;
-        const double q = MomentWeights::cubic_invariant(xi);
-        a00 += v * r * nx * nx * nx * nx;
-        a01 += v * r * nx * nx * nx * nx * q;
-        a10 += v * r * nx * nx * ny * ny;
-        a11 += v * r * nx * nx * ny * ny * q;
-      }
-    }
-  }
+  for_each_offset_within(spec.lattice.horizon_factor, dim, spec.horizon_rule,
+                         [&](const std::array<long long, 3>& o) {
+                           const Vec3 xi = offset_vector(o, lambda);
+                           const double r = norm(xi);
+                           const double nx = xi[0] / r, ny = xi[1] / r;
+                           const double q = MomentWeights::cubic_invariant(xi);
+                           a00 += v * r * nx * nx * nx * nx;
+                           a01 += v * r * nx * nx * nx * nx * q;
+                           a10 += v * r * nx * nx * ny * ny;
+                           a11 += v * r * nx * nx * ny * ny * q;
+                         });
   MomentWeights w;
   const double c4 = uniaxial_energy_moment(spec.dimension, delta);
   if (dim == 1) {
@@ -377,7 +359,8 @@ MomentWeights moment_matched_weights(const ModelSpec& spec) {
   return w;
 }
 
-std::vector<double> volume_correction_factors(const ModelSpec& spec, const ParticleSet& particles,
+std::vector<double> volume_correction_factors(const CorrectionSpec& spec,
+                                              const ParticleSet& particles,
                                               const BondFamily& family) {
   const double delta = spec.lattice.horizon();
   const double lambda = spec.lattice.spacing;
@@ -443,7 +426,7 @@ std::vector<double> volume_correction_factors(const ModelSpec& spec, const Parti
 }
 
 std::vector<std::array<double, 3>>
-energy_surface_factors(const ModelSpec& spec, const ParticleSet& particles,
+energy_surface_factors(const CorrectionSpec& spec, const ParticleSet& particles,
                        const BondFamily& family, const std::vector<double>& volume_factor) {
   // Uniaxial strain ε along axis d, u = ε x_d e_d: a bond with direction n has the linearised
   // stretch s = ε n_d², energy density w = ½ c s² |ξ| per unit volume², and the particle's
@@ -518,7 +501,7 @@ bool solve_small(std::array<std::array<double, 3>, 3> a, std::array<double, 3> b
 } // namespace
 
 std::vector<std::array<double, 3>>
-tensor_surface_factors(const ModelSpec& spec, const ParticleSet& particles,
+tensor_surface_factors(const CorrectionSpec& spec, const ParticleSet& particles,
                        const BondFamily& family, const std::vector<double>& volume_factor) {
   // Half-bond view of the bond energy: the energy ½ c s² |ξ| V_i V_j of bond ij is shared
   // equally by its ends, and particle i scales its own half by φ_i(n) = n·G_i·n = Σ_d g_d n_d².
@@ -610,7 +593,8 @@ tensor_surface_factors(const ModelSpec& spec, const ParticleSet& particles,
   return g;
 }
 
-std::vector<double> isotropic_surface_factors(const ModelSpec& spec, const ParticleSet& particles,
+std::vector<double> isotropic_surface_factors(const CorrectionSpec& spec,
+                                              const ParticleSet& particles,
                                               const BondFamily& family,
                                               const std::vector<double>& volume_factor) {
   // Isotropic expansion u = ε x: every bond has s = ε, W_i = ¼ c ε² Σ_j |ξ| V_j f_j; the
@@ -651,7 +635,8 @@ void scale_by_axis_factors(const ParticleSet& particles, const BondFamily& famil
 
 } // namespace
 
-std::vector<double> bond_correction_factors(const ModelSpec& spec, const ParticleSet& particles,
+std::vector<double> bond_correction_factors(const CorrectionSpec& spec,
+                                            const ParticleSet& particles,
                                             const BondFamily& family) {
   const std::size_t n = particles.size();
   const int dim = spec.dimension.dim;

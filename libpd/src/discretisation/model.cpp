@@ -1,7 +1,5 @@
 #include "libpd/discretisation/model.hpp"
 
-#include "libpd/discretisation/corrections.hpp"
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -162,41 +160,39 @@ std::vector<Constraint> support_constraints(const ModelSpec& spec, const Particl
   return out;
 }
 
-std::size_t Model::memory_bytes() const {
-  const std::size_t n = size();
-  std::size_t bytes = n * (sizeof(Vec3) + sizeof(double) + 2 * sizeof(std::uint16_t));
-  bytes += family.memory_bytes();
-  bytes += (field.bond_stiffness.size() + field.bond_critical_stretch.size() +
-            field.bond_yield_stretch.size()) *
-           sizeof(double);
-  bytes +=
-      state.broken.size() + (state.plastic_stretch.size() + state.damage.size()) * sizeof(double);
-  bytes += density.size() * sizeof(double) + external_force_density.size() * sizeof(double);
-  bytes += constraints.size() * sizeof(Constraint);
-  bytes += 9 * n * sizeof(double); // run state: positions, velocities, forces
-  return bytes;
+EffectSet kernel_effects(const ModelSpec& spec, std::size_t materials_used) {
+  EffectSet effects = spec.effects;
+  effects.per_bond_field =
+      materials_used > 1 || spec.corrections().corrects() || spec.lattice.volume_variation > 0;
+  effects.body_force = std::any_of(spec.loads.begin(), spec.loads.end(), [](const LoadSpec& l) {
+    return l.load.kind == BoxRegionLoad::Kind::body;
+  });
+  return effects;
 }
 
-ModelSizeEstimate estimate_model_size(const ModelSpec& spec) {
-  ModelSizeEstimate e;
-  Region all;
-  for (const BodySpec& b : spec.bodies) {
-    all.boxes.insert(all.boxes.end(), b.region.boxes.begin(), b.region.boxes.end());
+ModelStorage model_storage(const ModelSpec& spec, const EffectSet& effects) {
+  // The arrays build_model allocates, each under the condition it allocates them on.
+  constexpr std::size_t dbl = sizeof(double);
+  ModelStorage s;
+  s.per_particle = sizeof(Vec3) + dbl + 2 * sizeof(std::uint16_t); // particle set
+  s.per_particle += sizeof(std::size_t);                           // CSR offsets
+  s.per_particle += dbl;                                           // density
+  s.per_particle += spec.loads.empty() ? 0 : 3 * dbl;              // external force density
+  s.per_particle += effects.damage ? dbl : 0;                      // damage index
+  s.per_particle += 9 * dbl;                         // run state: positions, velocities, forces
+  s.per_directed_bond = sizeof(std::uint32_t) + dbl; // CSR neighbour and 1/|ξ|
+  if (effects.per_bond_field) {
+    s.per_directed_bond += dbl + (effects.damage ? dbl : 0) + (effects.plasticity ? dbl : 0);
   }
-  e.particles = count_lattice_points(spec.dimension, spec.lattice, all);
-  const double lambda = spec.lattice.spacing;
-  const double family = bulk_family_volume(spec) / cell_volume(spec.dimension, lambda);
-  e.bonds = 0.5 * static_cast<double>(e.particles) * family;
-  const double per_directed = sizeof(std::uint32_t) + sizeof(double) +
-                              (spec.surface_correction != SurfaceCorrection::none ||
-                                       spec.volume_correction != VolumeCorrection::none
-                                   ? sizeof(double)
-                                   : 0) +
-                              (spec.effects.damage ? 1.0 : 0.0) +
-                              (spec.effects.plasticity ? sizeof(double) : 0);
-  e.bytes = static_cast<double>(e.particles) * (sizeof(Vec3) + 14.0 * sizeof(double)) +
-            2.0 * e.bonds * per_directed;
-  return e;
+  s.per_directed_bond += (effects.damage ? sizeof(std::uint8_t) : 0) +
+                         (effects.plasticity ? dbl : 0); // broken flags, plastic stretch
+  return s;
+}
+
+std::size_t Model::memory_bytes() const {
+  return model_storage(spec, effects)
+             .bytes(size(), family.directed_bond_count(), constraints.size()) +
+         ModelStorage::fixed;
 }
 
 Model build_model(const ModelSpec& spec) {
@@ -214,15 +210,8 @@ Model build_model(const ModelSpec& spec) {
   }
   m.family = build_bond_family(m.particles.position, dim, delta, spec.horizon_rule);
 
-  // Effects that follow from the model rather than being declared.
-  m.effects = spec.effects;
   const std::set<std::uint16_t> used(m.particles.material.begin(), m.particles.material.end());
-  m.effects.per_bond_field =
-      used.size() > 1 || spec.surface_correction != SurfaceCorrection::none ||
-      spec.volume_correction != VolumeCorrection::none || spec.lattice.volume_variation > 0;
-  m.effects.body_force = std::any_of(spec.loads.begin(), spec.loads.end(), [](const LoadSpec& l) {
-    return l.load.kind == BoxRegionLoad::Kind::body;
-  });
+  m.effects = kernel_effects(spec, used.size());
 
   const auto constants = material_constants(spec);
   m.density.resize(n);
@@ -244,7 +233,8 @@ Model build_model(const ModelSpec& spec) {
     if (m.effects.plasticity) {
       m.field.bond_yield_stretch.resize(nb);
     }
-    const std::vector<double> correction = bond_correction_factors(spec, m.particles, m.family);
+    const std::vector<double> correction =
+        bond_correction_factors(spec.corrections(), m.particles, m.family);
     for (std::size_t i = 0; i < n; ++i) {
       for (std::size_t k = m.family.offsets[i]; k < m.family.offsets[i + 1]; ++k) {
         const std::size_t j = m.family.neighbour[k];

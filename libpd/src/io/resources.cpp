@@ -163,23 +163,8 @@ double bulk_family_size(const ModelDimension& d, const LatticeSpec& lattice, Hor
     // difference is below 1 % and the sum would cost 81³ evaluations.
     return ball;
   }
-  const double reach = rule == HorizonRule::inclusive ? m * (1.0 + horizon_guard_band)
-                                                      : m * (1.0 - horizon_guard_band);
-  const double reach2 = reach * reach;
-  const auto r = static_cast<long long>(std::ceil(m)) + 1;
-  const long long rj = d.dim > 1 ? r : 0;
-  const long long rk = d.dim > 2 ? r : 0;
   double count = 0;
-  for (long long k = -rk; k <= rk; ++k) {
-    for (long long j = -rj; j <= rj; ++j) {
-      for (long long i = -r; i <= r; ++i) {
-        const auto s2 = static_cast<double>(i * i + j * j + k * k);
-        if (s2 > 0 && (rule == HorizonRule::inclusive ? s2 <= reach2 : s2 < reach2)) {
-          count += 1;
-        }
-      }
-    }
-  }
+  for_each_offset_within(m, d.dim, rule, [&count](const std::array<long long, 3>&) { count += 1; });
   // Jitter moves particles in and out of the horizon; on average the family follows the ball.
   return lattice.position_jitter > 0 ? std::max(count, ball) : count;
 }
@@ -198,25 +183,8 @@ ResourceEstimate estimate_resources(const ModelSpec& spec, const SolverSpec& sol
   e.bonds = 0.5 * n * e.bonds_per_particle;
   const double directed = 2.0 * e.bonds;
 
-  // The terms of Model::memory_bytes(), in its order.
   constexpr double dbl = sizeof(double);
-  const bool damage = spec.effects.damage;
-  const bool plasticity = spec.effects.plasticity;
-  const bool corrected = spec.surface_correction != SurfaceCorrection::none ||
-                         spec.volume_correction != VolumeCorrection::none;
-  const bool per_bond_field =
-      distinct_materials(spec) > 1 || corrected || spec.lattice.volume_variation > 0;
-  double per_particle = sizeof(Vec3) + dbl + 2 * sizeof(std::uint16_t); // particle set
-  per_particle += sizeof(std::size_t);                                  // CSR offsets
-  per_particle += dbl;                                                  // density
-  per_particle += spec.loads.empty() ? 0 : 3 * dbl;                     // external forces
-  per_particle += damage ? dbl : 0;                                     // damage index
-  per_particle += 9 * dbl;                                              // run state
-  double per_bond = sizeof(std::uint32_t) + dbl;                        // CSR neighbour and 1/|ξ|
-  if (per_bond_field) {
-    per_bond += dbl + (damage ? dbl : 0) + (plasticity ? dbl : 0);
-  }
-  per_bond += (damage ? 1 : 0) + (plasticity ? dbl : 0); // broken flags, plastic stretch
+  const ModelStorage storage = model_storage(spec, kernel_effects(spec, distinct_materials(spec)));
   // Constraints: at most one per supported component of each particle in a support box.
   double constrained = 0;
   for (const SupportSpec& s : spec.supports) {
@@ -240,8 +208,7 @@ ResourceEstimate estimate_resources(const ModelSpec& spec, const SolverSpec& sol
     }
     constrained += std::min(members, n) * components;
   }
-  e.model_bytes = n * per_particle + directed * per_bond +
-                  constrained * static_cast<double>(sizeof(Constraint));
+  e.model_bytes = storage.bytes(n, directed, constrained);
 
   // Integrator vectors beyond the run state (3N doubles each, per-dof flags of one byte).
   const double dof = 3 * n;
@@ -281,7 +248,7 @@ ResourceEstimate estimate_resources(const ModelSpec& spec, const SolverSpec& sol
                  n * static_cast<double>(2 * sizeof(std::size_t) + sizeof(std::uint32_t));
   // Corrections hold up to two per-bond vectors while they are computed (volume factors and the
   // combined factors, or a reverse-bond index).
-  e.build_bytes = e.grid_bytes + (corrected ? 2 * directed * dbl : 0);
+  e.build_bytes = e.grid_bytes + (spec.corrections().corrects() ? 2 * directed * dbl : 0);
   e.bytes = e.model_bytes + e.integrator_bytes + e.build_bytes;
   if (std::isnan(e.bytes)) {
     e.bytes = inf;

@@ -1,6 +1,6 @@
 #include "libpd/kernel/spectrum.hpp"
 
-#include "libpd/kernel/force_kernel.hpp"
+#include "libpd/kernel/linear_operator.hpp"
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
@@ -10,38 +10,6 @@
 namespace pd {
 
 namespace {
-
-/// (K u) per unit volume for the linearised bond operator (Miranda eq. 30 with C = c ξ⊗ξ/|ξ|³):
-/// (Ku)_i = Σ_j k_ij n (n·(u_i − u_j)), k_ij = c_ij V_j/|ξ|, broken bonds left out.
-void apply_stiffness(const Model& m, const double* u, double* out) {
-  const auto n = static_cast<std::ptrdiff_t>(m.size());
-  const bool damage = !m.state.broken.empty();
-#pragma omp parallel for schedule(static) if (m.size() >= parallel_min_particles)
-  for (std::ptrdiff_t ii = 0; ii < n; ++ii) {
-    const auto i = static_cast<std::size_t>(ii);
-    double acc[3] = {0, 0, 0};
-    for (std::size_t k = m.family.offsets[i]; k < m.family.offsets[i + 1]; ++k) {
-      if (damage && m.state.broken[k]) {
-        continue;
-      }
-      const std::size_t j = m.family.neighbour[k];
-      const double inv = m.family.inverse_length[k];
-      const double kij = bond_stiffness(m, k) * inv;
-      double nv[3];
-      double proj = 0;
-      for (std::size_t c = 0; c < 3; ++c) {
-        nv[c] = (m.particles.position[j][c] - m.particles.position[i][c]) * inv;
-        proj += nv[c] * (u[3 * i + c] - u[3 * j + c]);
-      }
-      for (std::size_t c = 0; c < 3; ++c) {
-        acc[c] += kij * proj * nv[c];
-      }
-    }
-    for (std::size_t c = 0; c < 3; ++c) {
-      out[3 * i + c] = acc[c];
-    }
-  }
-}
 
 /// Largest eigenvalue of the symmetric tridiagonal matrix (alpha, beta) by Sturm-count bisection.
 double largest_tridiagonal_eigenvalue(const std::vector<double>& alpha,
@@ -115,7 +83,7 @@ public:
         u_[3 * c.particle + c.component] = c.mirror_sign * u_[3 * c.mirror_of + c.component];
       }
     }
-    apply_stiffness(m_, u_.data(), ku_.data());
+    apply_linearised_operator(m_, u_.data(), ku_.data());
     for (std::size_t d = 0; d < q.size(); ++d) {
       out[d] = ku_[d] * m_.particles.volume[d / 3] * scale_[d];
     }

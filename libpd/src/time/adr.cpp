@@ -28,6 +28,7 @@
 // ≈ 1.40 (Σ_j k_ij) v_i, beyond 4λ = Σ_j k_ij.
 #include "libpd/core/binary_state.hpp"
 #include "libpd/kernel/force_kernel.hpp"
+#include "libpd/kernel/linear_operator.hpp"
 #include "libpd/time/integrator.hpp"
 
 #include <algorithm>
@@ -41,20 +42,16 @@ std::vector<double> adr_fictitious_density(const Model& m) {
   std::vector<double> lambda(3 * n, 0.0);
   for (std::size_t i = 0; i < n; ++i) {
     double row[3] = {0, 0, 0};
-    for (std::size_t k = m.family.offsets[i]; k < m.family.offsets[i + 1]; ++k) {
-      const std::size_t j = m.family.neighbour[k];
-      const double inv = m.family.inverse_length[k];
-      const double kij = bond_stiffness(m, k) * inv;
-      double nv[3];
+    // Every bond, broken or not: λ is the bound of the undamaged operator.
+    for_each_linearised_bond(m, i, BrokenBonds::included, [&row](const LinearisedBond& b) {
       double l1 = 0;
       for (std::size_t c = 0; c < 3; ++c) {
-        nv[c] = (m.particles.position[j][c] - m.particles.position[i][c]) * inv;
-        l1 += std::abs(nv[c]);
+        l1 += std::abs(b.direction[c]);
       }
       for (std::size_t c = 0; c < 3; ++c) {
-        row[c] += 2.0 * kij * std::abs(nv[c]) * l1; // Gershgorin row sum of dof (i, c)
+        row[c] += 2.0 * b.stiffness * std::abs(b.direction[c]) * l1; // Gershgorin row sum of (i, c)
       }
-    }
+    });
     const double largest = std::max({row[0], row[1], row[2]});
     for (std::size_t c = 0; c < 3; ++c) {
       // λ_ii = ¼ Δt² Σ_j |K_ij| with Δt = 1. A component without stiffness (y, z of a 1D model)

@@ -72,6 +72,19 @@ bool arkode_available() {
 #endif
 }
 
+bool ButcherTableau::hit_by_issue_311() const {
+  if (stages < 1 || std::abs(c[static_cast<std::size_t>(stages - 1)] - 1.0) > 1e-12) {
+    return false;
+  }
+  const auto s = static_cast<std::size_t>(stages);
+  for (std::size_t j = 0; j < s; ++j) {
+    if (std::abs(a[(s - 1) * s + j] - b[j]) > 1e-14) {
+      return true; // c_s = 1 but not first-same-as-last
+    }
+  }
+  return false;
+}
+
 #ifdef LIBPD_HAVE_SUNDIALS
 
 namespace {

@@ -1,3 +1,6 @@
+// What every integrator shares: the checkpointed counters, prescribed and mirror displacements,
+// the displacement report, and the factory that picks a scheme. Each scheme has its own file
+// (damped_euler.cpp, verlet.cpp, adr.cpp, arkode.cpp).
 #include "libpd/time/integrator.hpp"
 
 #include "libpd/core/binary_state.hpp"
@@ -45,19 +48,6 @@ std::string to_string(ArkodeTable table) {
     return "dormand-prince";
   }
   return "?";
-}
-
-bool ButcherTableau::hit_by_issue_311() const {
-  if (stages < 1 || std::abs(c[static_cast<std::size_t>(stages - 1)] - 1.0) > 1e-12) {
-    return false;
-  }
-  const auto s = static_cast<std::size_t>(stages);
-  for (std::size_t j = 0; j < s; ++j) {
-    if (std::abs(a[(s - 1) * s + j] - b[j]) > 1e-14) {
-      return true; // c_s = 1 but not first-same-as-last
-    }
-  }
-  return false;
 }
 
 void Integrator::save(CheckpointWriter& w) const {
@@ -123,143 +113,14 @@ StepReport displacement_report(const Model& m, const double* y) {
   return r;
 }
 
-namespace {
-
-/// Miranda §3.2, steps (2)–(19): forces at the current positions, then
-/// v ← ψ [v + Δt (b + F b_ext)/ρ], y ← y + Δt v. With c_v = 0 this is Euler–Cromer.
-class DampedEuler final : public Integrator {
-public:
-  DampedEuler(Model& m, ForceEvaluator& f, const IntegratorSettings& s)
-      : model_(m), forces_(f), damping_(s.damping), ramp_(s.ramp),
-        name_(s.kind == IntegratorKind::euler_cromer ? "euler-cromer" : "damped-euler") {}
-
-  StepReport step(State& st, double dt) override {
-    ++calls_;
-    forces_.compute(st.position.data(), st.force.data());
-    ++force_evaluations_;
-    const double t_new = st.time + dt;
-    const double load = ramp_.factor(t_new);
-    const double* ext =
-        model_.external_force_density.empty() ? nullptr : model_.external_force_density.data();
-    const auto n = static_cast<std::ptrdiff_t>(model_.size());
-    double* y = st.position.data();
-    double* v = st.velocity.data();
-    const double* b = st.force.data();
-#pragma omp parallel for schedule(static) if (model_.size() >= parallel_min_particles)
-    for (std::ptrdiff_t ii = 0; ii < n; ++ii) {
-      const auto i = static_cast<std::size_t>(ii);
-      const double rho = model_.density[i];
-      const double psi = 1.0 / (1.0 + dt * damping_ / rho); // eq. 32
-      for (std::size_t c = 0; c < 3; ++c) {
-        const std::size_t dof = 3 * i + c;
-        const double f = ext != nullptr ? b[dof] + load * ext[dof] : b[dof];
-        v[dof] = psi * (v[dof] + dt * f / rho);
-        y[dof] += dt * v[dof];
-      }
-    }
-    apply_constraints(model_, ramp_, t_new, y, v);
-    st.time = t_new;
-    ++st.step;
-    return displacement_report(model_, y);
-  }
-
-  std::string name() const override {
-    return name_;
-  }
-
-private:
-  Model& model_;
-  ForceEvaluator& forces_;
-  double damping_;
-  LoadRamp ramp_;
-  std::string name_;
-};
-
-/// Velocity Verlet: half kick, drift, force, half kick. One force evaluation per step after the
-/// first.
-class VelocityVerlet final : public Integrator {
-public:
-  VelocityVerlet(Model& m, ForceEvaluator& f, const IntegratorSettings& s)
-      : model_(m), forces_(f), ramp_(s.ramp) {}
-
-  StepReport step(State& st, double dt) override {
-    ++calls_;
-    if (!primed_) {
-      forces_.compute(st.position.data(), st.force.data());
-      ++force_evaluations_;
-      primed_ = true;
-    }
-    kick(st, 0.5 * dt, ramp_.factor(st.time));
-    const auto ndof = static_cast<std::ptrdiff_t>(st.position.size());
-    double* y = st.position.data();
-    const double* v = st.velocity.data();
-#pragma omp parallel for schedule(static) if (model_.size() >= parallel_min_particles)
-    for (std::ptrdiff_t d = 0; d < ndof; ++d) {
-      y[d] += dt * v[d];
-    }
-    st.time += dt;
-    apply_constraints(model_, ramp_, st.time, y, nullptr);
-    forces_.compute(st.position.data(), st.force.data());
-    ++force_evaluations_;
-    kick(st, 0.5 * dt, ramp_.factor(st.time));
-    apply_constraints(model_, ramp_, st.time, y, st.velocity.data());
-    ++st.step;
-    return displacement_report(model_, y);
-  }
-
-  std::string name() const override {
-    return "verlet";
-  }
-
-protected:
-  // The first step computes the force at the initial positions; later steps reuse State::force,
-  // which the checkpoint holds.
-  void save_state(CheckpointWriter& w) const override {
-    w.boolean(primed_);
-  }
-  void restore_state(CheckpointReader& r) override {
-    primed_ = r.boolean();
-  }
-
-private:
-  void kick(State& st, double h, double load) {
-    const double* ext =
-        model_.external_force_density.empty() ? nullptr : model_.external_force_density.data();
-    const auto n = static_cast<std::ptrdiff_t>(model_.size());
-    double* v = st.velocity.data();
-    const double* b = st.force.data();
-#pragma omp parallel for schedule(static) if (model_.size() >= parallel_min_particles)
-    for (std::ptrdiff_t ii = 0; ii < n; ++ii) {
-      const auto i = static_cast<std::size_t>(ii);
-      const double scale = h / model_.density[i];
-      for (std::size_t c = 0; c < 3; ++c) {
-        const std::size_t dof = 3 * i + c;
-        v[dof] += scale * (ext != nullptr ? b[dof] + load * ext[dof] : b[dof]);
-      }
-    }
-  }
-
-  Model& model_;
-  ForceEvaluator& forces_;
-  LoadRamp ramp_;
-  bool primed_ = false;
-};
-
-} // namespace
-
 std::unique_ptr<Integrator> make_integrator(const IntegratorSettings& s, Model& model,
                                             ForceEvaluator& forces) {
   switch (s.kind) {
   case IntegratorKind::damped_euler:
-  case IntegratorKind::euler_cromer: {
-    IntegratorSettings settings = s;
-    if (s.kind == IntegratorKind::euler_cromer) {
-      settings.damping = 0;
-    }
-    return std::make_unique<DampedEuler>(model, forces, settings);
-  }
+  case IntegratorKind::euler_cromer:
+    return make_damped_euler_integrator(s, model, forces);
   case IntegratorKind::verlet:
-    return std::make_unique<VelocityVerlet>(model, forces, s);
+    return make_verlet_integrator(s, model, forces);
   case IntegratorKind::adr:
     return make_adr_integrator(s, model, forces);
   case IntegratorKind::arkode:

@@ -26,6 +26,25 @@ enum class HorizonRule { inclusive, strict };
 
 inline constexpr double horizon_guard_band = 1e-9;
 
+/// The in-horizon rule, the one test behind every bond family, lattice-offset sum and resource
+/// estimate: a bond of squared length r² exists iff r² ≤ reach² (inclusive) or r² < reach²
+/// (strict), reach = δ(1 ± horizon_guard_band). Lengths and horizon may be in any one unit (the
+/// lattice sums use units of λ, where δ = m).
+struct InHorizon {
+  InHorizon(double horizon, HorizonRule rule)
+      : reach(rule == HorizonRule::inclusive ? horizon * (1.0 + horizon_guard_band)
+                                             : horizon * (1.0 - horizon_guard_band)),
+        reach_squared(reach * reach), inclusive(rule == HorizonRule::inclusive) {}
+
+  bool operator()(double length_squared) const {
+    return inclusive ? length_squared <= reach_squared : length_squared < reach_squared;
+  }
+
+  double reach;         ///< longest bond length that can exist (neighbour-search cell size)
+  double reach_squared; ///< reach²
+  bool inclusive;
+};
+
 struct BondFamily {
   std::vector<std::size_t> offsets;     ///< size N+1; row i is [offsets[i], offsets[i+1])
   std::vector<std::uint32_t> neighbour; ///< j of each directed bond
@@ -36,10 +55,6 @@ struct BondFamily {
   /// Number of bonds (unordered pairs), the count the papers report.
   std::size_t bond_count() const { return neighbour.size() / 2; }
   std::size_t family_size(std::size_t i) const { return offsets[i + 1] - offsets[i]; }
-  std::size_t memory_bytes() const {
-    return offsets.size() * sizeof(std::size_t) +
-           neighbour.size() * (sizeof(std::uint32_t) + sizeof(double));
-  }
 };
 
 /// Build the families with a cell list of cell size δ: O(N) for a bounded density.

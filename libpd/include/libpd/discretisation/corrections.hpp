@@ -12,12 +12,35 @@
 
 #include "libpd/discretisation/bond_family.hpp"
 #include "libpd/discretisation/lattice.hpp"
-#include "libpd/discretisation/model.hpp"
+#include "libpd/physics/material.hpp"
 
 #include <array>
 #include <vector>
 
 namespace pd {
+
+/// Per-bond modifiers of the bond stiffness, beyond the neighbour volume (corrections.hpp).
+enum class SurfaceCorrection { none, volume, energy, macek_silling, tensor };
+/// Quadrature weights of the bonds: partial-volume corrections of neighbour cells cut by the
+/// horizon (`linear`, `exact`), or lattice weights that reproduce the continuum's fourth moments
+/// (`moment`, see corrections.hpp).
+enum class VolumeCorrection { none, linear, exact, moment };
+
+/// What the corrections read of a model: its dimension, lattice, horizon rule and the two
+/// corrections (ModelSpec::corrections()).
+struct CorrectionSpec {
+  ModelDimension dimension;
+  LatticeSpec lattice;
+  HorizonRule horizon_rule = HorizonRule::inclusive;
+  SurfaceCorrection surface_correction = SurfaceCorrection::none;
+  VolumeCorrection volume_correction = VolumeCorrection::none;
+
+  /// Whether any correction applies, i.e. whether bonds carry factors other than 1.
+  bool corrects() const {
+    return surface_correction != SurfaceCorrection::none ||
+           volume_correction != VolumeCorrection::none;
+  }
+};
 
 /// Fraction of neighbour j's volume that counts for a bond of reference length r, for the
 /// corrections that depend on r alone (`none`, `linear`). `exact` depends on the bond vector:
@@ -36,7 +59,7 @@ double exact_volume_fraction(int dim, const Vec3& xi, double horizon, double spa
 /// Family volume Σ_j V_j·(volume fraction) of a particle in the bulk of the spec's lattice:
 /// the V0 of the `volume` surface correction (the lattice sum, not 4πδ³/3, so that quadrature
 /// error does not become a spurious bulk factor).
-double bulk_family_volume(const ModelSpec& spec);
+double bulk_family_volume(const CorrectionSpec& spec);
 
 /// Continuum moments of a full horizon that the bond-based constants are calibrated to:
 ///  uniaxial: ∫_H n_x⁴ |ξ| dV  (πδ⁴/5 in 3D, t·πδ³/4 in 2D, A·δ² in 1D)
@@ -47,13 +70,14 @@ double uniaxial_energy_moment(const ModelDimension& d, double horizon);
 double isotropic_energy_moment(const ModelDimension& d, double horizon);
 
 /// Partial-volume factor of every directed bond (CSR order) for spec.volume_correction.
-std::vector<double> volume_correction_factors(const ModelSpec& spec, const ParticleSet& particles,
+std::vector<double> volume_correction_factors(const CorrectionSpec& spec,
+                                              const ParticleSet& particles,
                                               const BondFamily& family);
 
 /// Energy method (Madenci & Oterkus): per particle and axis d < dim, the ratio of the classical
 /// to the PD strain-energy density under a uniaxial strain along d, both with the bond weights
 /// `volume_factor` (the partial-volume factors of the same bonds). Unused axes hold 1.
-std::vector<std::array<double, 3>> energy_surface_factors(const ModelSpec& spec,
+std::vector<std::array<double, 3>> energy_surface_factors(const CorrectionSpec& spec,
                                                           const ParticleSet& particles,
                                                           const BondFamily& family,
                                                           const std::vector<double>& volume_factor);
@@ -71,14 +95,15 @@ double uniaxial_stress_energy_moment(const ModelDimension& d, double horizon);
 /// such that particle i's own halves of its bonds, each scaled by n·G_i·n, store the classical
 /// energy density of a uniaxial stress along every axis (see corrections.cpp). Bond weights
 /// `volume_factor` as in energy_surface_factors.
-std::vector<std::array<double, 3>> tensor_surface_factors(const ModelSpec& spec,
+std::vector<std::array<double, 3>> tensor_surface_factors(const CorrectionSpec& spec,
                                                           const ParticleSet& particles,
                                                           const BondFamily& family,
                                                           const std::vector<double>& volume_factor);
 
 /// Per-particle factor of the `macek-silling` correction (see corrections.cpp for what it is and
 /// how sure we are of the source): classical over PD energy density under isotropic expansion.
-std::vector<double> isotropic_surface_factors(const ModelSpec& spec, const ParticleSet& particles,
+std::vector<double> isotropic_surface_factors(const CorrectionSpec& spec,
+                                              const ParticleSet& particles,
                                               const BondFamily& family,
                                               const std::vector<double>& volume_factor);
 
@@ -112,11 +137,11 @@ struct MomentWeights {
   }
   double weight(const Vec3& xi) const { return alpha + beta * cubic_invariant(xi); }
 };
-MomentWeights moment_matched_weights(const ModelSpec& spec);
+MomentWeights moment_matched_weights(const CorrectionSpec& spec);
 
 /// The product of the surface and volume correction factors for every directed bond, in CSR
 /// order. All ones when both corrections are `none`.
-std::vector<double> bond_correction_factors(const ModelSpec& spec, const ParticleSet& particles,
-                                            const BondFamily& family);
+std::vector<double> bond_correction_factors(const CorrectionSpec& spec,
+                                            const ParticleSet& particles, const BondFamily& family);
 
 } // namespace pd

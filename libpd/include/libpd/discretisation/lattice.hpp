@@ -12,8 +12,11 @@
 #pragma once
 
 #include "libpd/core/geometry.hpp"
+#include "libpd/discretisation/bond_family.hpp"
 #include "libpd/physics/material.hpp"
 
+#include <array>
+#include <cmath>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -64,5 +67,27 @@ ParticleSet generate_lattice(const ModelDimension& d, const LatticeSpec& lattice
 /// Number of lattice points of `lattice` that fall inside `region` (used to reject empty regions).
 std::size_t count_lattice_points(const ModelDimension& d, const LatticeSpec& lattice,
                                  const Region& region);
+
+/// Visit every lattice offset o ≠ 0 of a bulk family, in units of λ (components beyond `dim`
+/// zero): the offsets whose length lies inside the horizon m = `horizon_factor` by `rule`, in a
+/// fixed order (x fastest), so that sums over them are reproducible. The lengths are tested
+/// exactly (|o|² is an integer), with the guard band of InHorizon. Work (2⌈m⌉ + 3)^dim.
+template <class Visit>
+void for_each_offset_within(double horizon_factor, int dim, HorizonRule rule, Visit&& visit) {
+  const InHorizon inside(horizon_factor, rule);
+  const auto r = static_cast<long long>(std::ceil(horizon_factor)) + 1;
+  const long long rj = dim > 1 ? r : 0;
+  const long long rk = dim > 2 ? r : 0;
+  for (long long k = -rk; k <= rk; ++k) {
+    for (long long j = -rj; j <= rj; ++j) {
+      for (long long i = -r; i <= r; ++i) {
+        const auto s2 = static_cast<double>(i * i + j * j + k * k);
+        if (s2 > 0 && inside(s2)) {
+          visit(std::array<long long, 3>{i, j, k});
+        }
+      }
+    }
+  }
+}
 
 } // namespace pd

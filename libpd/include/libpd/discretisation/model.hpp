@@ -3,8 +3,9 @@
 #pragma once
 
 #include "libpd/discretisation/bond_family.hpp"
-#include "libpd/physics/effects.hpp"
+#include "libpd/discretisation/corrections.hpp"
 #include "libpd/discretisation/lattice.hpp"
+#include "libpd/physics/effects.hpp"
 #include "libpd/physics/material.hpp"
 
 #include <cstdint>
@@ -16,13 +17,6 @@
 namespace pd {
 
 inline constexpr double no_limit = std::numeric_limits<double>::infinity();
-
-/// Per-bond modifiers of the bond stiffness, beyond the neighbour volume (corrections.hpp).
-enum class SurfaceCorrection { none, volume, energy, macek_silling, tensor };
-/// Quadrature weights of the bonds: partial-volume corrections of neighbour cells cut by the
-/// horizon (`linear`, `exact`), or lattice weights that reproduce the continuum's fourth moments
-/// (`moment`, see corrections.hpp).
-enum class VolumeCorrection { none, linear, exact, moment };
 
 /// Bond stiffness and strengths. Either one value for the whole body (uniform) or one value per
 /// directed bond (per-bond field): the kernel is compiled for one of the two.
@@ -96,6 +90,11 @@ struct ModelSpec {
   EffectSet effects;
   SurfaceCorrection surface_correction = SurfaceCorrection::none;
   VolumeCorrection volume_correction = VolumeCorrection::none;
+
+  /// What the bond corrections read of the model (corrections.hpp).
+  CorrectionSpec corrections() const {
+    return {dimension, lattice, horizon_rule, surface_correction, volume_correction};
+  }
 };
 
 struct Model {
@@ -115,13 +114,35 @@ struct Model {
   std::size_t memory_bytes() const;
 };
 
-/// Estimate of the memory `build_model` will need, from the lattice size alone (no allocation).
-struct ModelSizeEstimate {
-  std::size_t particles = 0;
-  double bonds = 0; ///< estimated from the bulk family size
-  double bytes = 0;
+/// The effect axes the force kernel is compiled for: the effects `spec` declares, plus the two
+/// that follow from the model rather than being declared, a per-bond field (several materials
+/// in use, a surface or volume correction, or varying particle volumes) and body forces (a load
+/// of kind `body`). `materials_used`: how many distinct materials the particles carry.
+EffectSet kernel_effects(const ModelSpec& spec, std::size_t materials_used);
+
+/// Bytes a model holds per particle, per directed bond and per constraint: the one account of a
+/// model's memory, behind both Model::memory_bytes() (actual counts) and estimate_resources
+/// (counts estimated from the specification), so the two cannot drift apart.
+struct ModelStorage {
+  std::size_t per_particle = 0; ///< particle set, CSR offset, density, loads, damage, run state
+  std::size_t per_directed_bond = 0; ///< CSR neighbour and 1/|ξ|, per-bond field, bond history
+  static constexpr std::size_t per_constraint = sizeof(Constraint);
+  /// Bytes that do not grow with the model: the closing entry of the CSR offsets. The resource
+  /// estimate leaves them out.
+  static constexpr std::size_t fixed = sizeof(std::size_t);
+
+  /// Bytes of the storage that grows with the model, for counts of type T (std::size_t for the
+  /// actual model, double for estimates).
+  template <class T>
+  T bytes(T particles, T directed_bonds, T constraints) const {
+    return particles * static_cast<T>(per_particle) +
+           directed_bonds * static_cast<T>(per_directed_bond) +
+           constraints * static_cast<T>(per_constraint);
+  }
 };
-ModelSizeEstimate estimate_model_size(const ModelSpec& spec);
+
+/// The storage of a model of `spec` whose kernel runs with `effects` (kernel_effects).
+ModelStorage model_storage(const ModelSpec& spec, const EffectSet& effects);
 
 /// A support that cannot act as specified; `support` is its index in ModelSpec::supports.
 struct SupportError : std::runtime_error {

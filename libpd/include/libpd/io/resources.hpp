@@ -32,7 +32,7 @@ struct ResourceEstimate {
   double particles = 0;          ///< lattice points in the union of the body boxes
   double bonds_per_particle = 0; ///< bulk family size, capped at particles − 1
   double bonds = 0;              ///< unordered pairs, particles × bonds_per_particle / 2
-  double model_bytes = 0;        ///< what `Model::memory_bytes()` will report
+  double model_bytes = 0;        ///< what `Model::memory_bytes()` will report (ModelStorage)
   double integrator_bytes = 0;   ///< vectors of the integrator beyond the model's run state
   double build_bytes = 0;        ///< transient while building: neighbour grid, correction factors
   double bytes = 0;              ///< total: model + integrator + build transients

@@ -8,17 +8,17 @@
 //                uses the new velocity; with the old one, as eq. 6 is printed, the scheme is
 //                forward Euler and unconditionally unstable for an undamped oscillator).
 //  verlet        velocity Verlet, second order and symplectic; for dynamics and energy checks.
-//  adr           adaptive dynamic relaxation (Kilic & Madenci 2010; src/adr.cpp): central
+//  adr           adaptive dynamic relaxation (Kilic & Madenci 2010; time/adr.cpp): central
 //                differences in fictitious time (Δt = 1) with a fictitious diagonal density from
 //                the Gershgorin bound of the stiffness and a damping coefficient from the Rayleigh
 //                quotient of the local stiffness, recomputed every step. Quasi-static only.
 //  arkode        SUNDIALS ARKode ERKStep on y = [u; v], y' = [v; a(u, v, t)]
-//                (src/arkode_integrator.cpp): a Butcher table, fixed or adaptive steps, kinematic
+//                (time/arkode.cpp): a Butcher table, fixed or adaptive steps, kinematic
 //                damping as a term of the right-hand side. Needs LIBPD_WITH_SUNDIALS.
 #pragma once
 
-#include "libpd/kernel/force_kernel.hpp"
 #include "libpd/discretisation/model.hpp"
+#include "libpd/kernel/force_kernel.hpp"
 
 #include <cstddef>
 #include <memory>
@@ -155,13 +155,18 @@ struct IntegratorSettings {
 /// damage or plasticity, adaptive without an embedding).
 std::unique_ptr<Integrator> make_integrator(const IntegratorSettings& settings, Model& model,
                                             ForceEvaluator& forces);
+/// The factories of each integrator's own file (make_integrator picks one by settings.kind).
+std::unique_ptr<Integrator> make_damped_euler_integrator(const IntegratorSettings& settings,
+                                                         Model& model, ForceEvaluator& forces);
+std::unique_ptr<Integrator> make_verlet_integrator(const IntegratorSettings& settings, Model& model,
+                                                   ForceEvaluator& forces);
 std::unique_ptr<Integrator> make_adr_integrator(const IntegratorSettings& settings, Model& model,
                                                 ForceEvaluator& forces);
 std::unique_ptr<Integrator> make_arkode_integrator(const IntegratorSettings& settings, Model& model,
                                                    ForceEvaluator& forces);
 
 /// ADR's fictitious density λ per degree of freedom (3N): ¼ Δt² times the Gershgorin row sum of
-/// the linearised bond operator, Δt = 1 (src/adr.cpp).
+/// the linearised bond operator, Δt = 1 (time/adr.cpp).
 std::vector<double> adr_fictitious_density(const Model& model);
 
 /// Largest |u|² over particles (may be +inf), NaN as soon as any coordinate is not finite.
