@@ -12,11 +12,15 @@
 #include <chrono>
 #include <memory>
 #include <optional>
+#include <vector>
 
 namespace pd {
 
 namespace {
 
+/// One run of one scene. Its one public verb, run(), calls the private steps below in the order
+/// they are written; the state they share (model, simulation, probes, output, checkpoints) is
+/// held here so that each step reads as a few lines.
 class SceneRun {
 public:
   SceneRun(const Scene& scene, const RunOptions& options) : scene_(scene), options_(options) {}
@@ -94,6 +98,7 @@ private:
   // Record. One row of probe values at the simulation's current time.
   void record(const Simulation& s) { out_.history.record(probes_, s); }
 
+  // A checkpoint: the simulation's state with the run's record so far (history, VTU frames).
   void save_checkpoint(const Simulation& s) {
     checkpoints_->save(fingerprint(), s, out_.history, output_->frames());
     out_.checkpoint = checkpoints_->file();
