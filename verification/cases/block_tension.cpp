@@ -225,10 +225,8 @@ Json run_block_tension_corrections(const Context& ctx) {
     }
   }
   out["m_convergence"] = sweep;
-  out["gate"] = "none: reported only (block-tension gates the default corrections)";
-  out["passed"] = true;
-  out["wall_seconds"] =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  finish_case(out, "none: reported only (block-tension gates the default corrections)", true,
+              start);
   return out;
 }
 

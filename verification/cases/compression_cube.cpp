@@ -187,24 +187,13 @@ CubeRun run_cube(const Scene& scene, const std::filesystem::path& dir, bool full
   const auto outcome =
       quasi_static::run(model, scene.solver, scene.initial, st, std::ref(record));
   r.completed = outcome.completed;
-  std::size_t not_converged = 0;
-  for (const auto& inc : outcome.increments) {
-    not_converged += inc.converged ? 0 : 1;
-  }
   r.json["peak_stress_MPa"] = 1e-6 * r.peak_stress;
   r.json["peak_strain_percent"] = 100 * r.peak_strain;
   r.json["final_stress_MPa"] = 1e-6 * r.last_stress;
   r.json["failed"] = r.failed;
   r.json["max_stress_after_failure_branch_MPa"] = 1e-6 * r.max_stress;
   r.json["max_stress_strain_percent"] = 100 * r.max_strain;
-  r.json["increments_done"] = outcome.increments.size();
-  r.json["increments_not_converged"] = not_converged;
-  r.json["adr_iterations"] = outcome.iterations;
-  r.json["completed"] = outcome.completed;
-  if (!outcome.stop_reason.empty()) {
-    r.json["stop_reason"] = outcome.stop_reason;
-  }
-  r.json["wall_seconds"] = outcome.wall_seconds;
+  record_outcome(r.json, outcome, false);
   if (full) {
     r.json["evolution"] = evolution;
   }
@@ -273,7 +262,7 @@ Json run_compression_cube(const Context& ctx) {
     CubeRun r = run_cube(s, {}, false, ctx.progress);
     r.json["s0"] = value;
     r.json["label"] = label;
-    r.json["peak_change"] = main.peak_stress > 0 ? r.peak_stress / main.peak_stress - 1.0 : 0.0;
+    r.json["peak_change"] = peak_change(r.peak_stress, main.peak_stress);
     fmt::print("   s0 = {:.4e} ({}): peak {:.2f} MPa at {:.3f} % ({:.0f} s)\n", value, label,
                1e-6 * r.peak_stress, 100 * r.peak_strain, *r.json.find("wall_seconds")->number());
     std::fflush(stdout);
@@ -293,19 +282,17 @@ Json run_compression_cube(const Context& ctx) {
     s.model.supports.at(1).region = s.model.bodies.at(2).region;
     CubeRun r = run_cube(s, {}, false, ctx.progress);
     r.json["spacing"] = spacing;
-    r.json["peak_change"] = main.peak_stress > 0 ? r.peak_stress / main.peak_stress - 1.0 : 0.0;
+    r.json["peak_change"] = peak_change(r.peak_stress, main.peak_stress);
     fmt::print("   λ = {:.4g} m: peak {:.2f} MPa at {:.3f} % ({:.0f} s)\n", spacing,
                1e-6 * r.peak_stress, 100 * r.peak_strain, *r.json.find("wall_seconds")->number());
     std::fflush(stdout);
     resolution.push_back(r.json);
   }
   out["resolution"] = resolution;
-  out["gate"] = "reported: runs to the full closure with s0 = f_ctm/E and produces a peak "
-                "followed by a drop of >= 5 %; differences to the paper and EC2 are reported, "
-                "not gated";
-  out["passed"] = main.completed && s0_consistent && main.peak_stress > 0 && main.failed;
-  out["wall_seconds"] =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  finish_case(out,
+              "reported: runs to the full closure with s0 = f_ctm/E and produces a peak followed "
+              "by a drop of >= 5 %; differences to the paper and EC2 are reported, not gated",
+              main.completed && s0_consistent && main.peak_stress > 0 && main.failed, start);
   return out;
 }
 

@@ -278,25 +278,11 @@ BeamRun run_beam(const Scene& scene, const std::filesystem::path& dir, bool full
     const double drop = r.peak_load > 0 ? 1.0 - r.last_load / r.peak_load : 0.0;
     r.json["shear_analysis_at_stop"] = shear_analysis(model, g, drop, r.shear_failure);
   }
-  std::size_t not_converged = 0;
-  double worst = 0;
-  for (const auto& inc : outcome.increments) {
-    not_converged += inc.converged ? 0 : 1;
-    worst = std::max(worst, inc.residual);
-  }
   r.json["critical_stretch"] = material(scene, "concrete").critical_stretch.value_or(0.0);
   r.json["peak_load_kN"] = 1e-3 * r.peak_load;
   r.json["peak_displacement_mm"] = 1e3 * r.peak_displacement;
   r.json["final_load_kN"] = 1e-3 * r.last_load;
-  r.json["increments_done"] = outcome.increments.size();
-  r.json["increments_not_converged"] = not_converged;
-  r.json["largest_residual"] = worst;
-  r.json["adr_iterations"] = outcome.iterations;
-  r.json["completed"] = outcome.completed;
-  if (!outcome.stop_reason.empty()) {
-    r.json["stop_reason"] = outcome.stop_reason;
-  }
-  r.json["wall_seconds"] = outcome.wall_seconds;
+  record_outcome(r.json, outcome, true);
   if (full) {
     r.json["curve"] = curve;
   }
@@ -304,7 +290,8 @@ BeamRun run_beam(const Scene& scene, const std::filesystem::path& dir, bool full
              "{} not converged, shear failure {}, {:.0f} s\n",
              *r.json.find("critical_stretch")->number(), 1e-3 * r.peak_load,
              1e3 * r.peak_displacement, 1e-3 * r.last_load, outcome.increments.size(),
-             not_converged, r.shear_failure ? "yes" : "no", outcome.wall_seconds);
+             increments_not_converged(outcome), r.shear_failure ? "yes" : "no",
+             outcome.wall_seconds);
   std::fflush(stdout);
   return r;
 }
@@ -357,16 +344,15 @@ Json run_rc_beam(const Context& ctx) {
     }
     BeamRun r = run_beam(s, {}, false, ctx.progress, 150);
     r.json["s0_factor"] = factor;
-    r.json["peak_change"] = main.peak_load > 0 ? r.peak_load / main.peak_load - 1.0 : 0.0;
+    r.json["peak_change"] = peak_change(r.peak_load, main.peak_load);
     sweep.push_back(r.json);
   }
   out["s0_sensitivity"] = sweep;
-  out["gate"] = "reported: the run completes to 20 mm, s0 = f_ct/E, a peak exists and the shear "
-                "failure detector finds a diagonal web band in a shear span with a load drop >= 20 "
-                "%; the paper gives no load values to compare with (Figure 16 geometry absent)";
-  out["passed"] = main.completed && s0_consistent && main.peak_load > 0 && main.shear_failure;
-  out["wall_seconds"] =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  finish_case(out,
+              "reported: the run completes to 20 mm, s0 = f_ct/E, a peak exists and the shear "
+              "failure detector finds a diagonal web band in a shear span with a load drop >= 20 "
+              "%; the paper gives no load values to compare with (Figure 16 geometry absent)",
+              main.completed && s0_consistent && main.peak_load > 0 && main.shear_failure, start);
   return out;
 }
 

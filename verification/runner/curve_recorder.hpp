@@ -1,12 +1,16 @@
 // The record of a quasi-static case (rc-beam, compression-cube): one CSV row per increment in
 // DIR/curve.csv, rewritten atomically after every increment so that an interrupted run keeps the
-// curve so far, and VTU files of the particles after chosen increments.
+// curve so far, VTU files of the particles after chosen increments, and how the run went in the
+// case's JSON.
 #pragma once
 
 #include "libpd/core/atomic_file.hpp"
+#include "libpd/core/json.hpp"
 #include "libpd/io/output.hpp"
 #include "libpd/time/quasi_static.hpp"
 
+#include <algorithm>
+#include <cstddef>
 #include <filesystem>
 #include <fmt/format.h>
 #include <functional>
@@ -46,5 +50,40 @@ private:
   std::string vtu_prefix_;
   Row row_;
 };
+
+inline std::size_t increments_not_converged(const quasi_static::Outcome& outcome) {
+  std::size_t n = 0;
+  for (const auto& inc : outcome.increments) {
+    n += inc.converged ? 0 : 1;
+  }
+  return n;
+}
+
+/// How an incremental run went, appended to its JSON: increments done and not converged, the
+/// largest residual if asked, ADR iterations, whether it completed (else why it stopped) and its
+/// wall time.
+inline void record_outcome(Json& j, const quasi_static::Outcome& outcome,
+                           bool with_largest_residual) {
+  j["increments_done"] = outcome.increments.size();
+  j["increments_not_converged"] = increments_not_converged(outcome);
+  if (with_largest_residual) {
+    double worst = 0;
+    for (const auto& inc : outcome.increments) {
+      worst = std::max(worst, inc.residual);
+    }
+    j["largest_residual"] = worst;
+  }
+  j["adr_iterations"] = outcome.iterations;
+  j["completed"] = outcome.completed;
+  if (!outcome.stop_reason.empty()) {
+    j["stop_reason"] = outcome.stop_reason;
+  }
+  j["wall_seconds"] = outcome.wall_seconds;
+}
+
+/// A sensitivity run's peak relative to the main run's (0 if the main run has none).
+inline double peak_change(double peak, double main_peak) {
+  return main_peak > 0 ? peak / main_peak - 1.0 : 0.0;
+}
 
 } // namespace pd::verification

@@ -70,4 +70,12 @@ double relative_error(double value, double reference) {
   return std::abs(value - reference) / std::abs(reference);
 }
 
+void finish_case(Json& out, const std::string& gate, bool passed,
+                 std::chrono::steady_clock::time_point start) {
+  out["gate"] = gate;
+  out["passed"] = passed;
+  out["wall_seconds"] =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
 } // namespace pd::verification

@@ -7,6 +7,7 @@
 
 #include "libpd/io/output.hpp"
 
+#include <chrono>
 #include <filesystem>
 #include <functional>
 #include <string>
@@ -39,5 +40,9 @@ double bar_modal_series(double x, double t, double strain, double length, double
 
 /// Relative error |a − b|/|b|.
 double relative_error(double value, double reference);
+
+/// The last keys of a case's JSON: its gate in words, the verdict and its wall time since `start`.
+void finish_case(Json& out, const std::string& gate, bool passed,
+                 std::chrono::steady_clock::time_point start);
 
 } // namespace pd::verification

@@ -1,0 +1,102 @@
+// pd run SCENE [-o DIR] [--threads N] [--checkpoint-every N] [--checkpoint FILE] [--restart FILE]
+// Run a scene: summary.json, probes.csv and VTU files in DIR, a short report on stdout.
+#include "libpd/app/run.hpp"
+
+#include "commands.hpp"
+
+#include <fmt/format.h>
+#include <memory>
+#include <unistd.h>
+
+namespace pd::cli {
+
+namespace {
+
+struct RunArgs {
+  std::string scene;
+  std::string out_dir = "out";
+  int threads = 0;
+  bool print_defaults = false;
+  std::size_t checkpoint_every = 0;
+  std::string checkpoint;
+  std::string restart;
+};
+
+void print_report(const RunArgs& a, const RunOutcome& out) {
+  if (out.restarted_from_step) {
+    fmt::print("restarted from {} at step {}\n", a.restart, *out.restarted_from_step);
+  }
+  fmt::print(
+      "{}: {} particles, {} bonds, {} steps of {:.4g} s (eq. 31 limit {:.4g} s), status {}\n",
+      a.scene, out.particles, out.bonds, out.result.steps, out.result.dt, out.result.dt_stable,
+      to_string(out.result.status));
+  fmt::print(
+      "wall {:.3f} s, {:.3g} bond updates/s, {} threads\n", out.result.wall_seconds,
+      bond_updates_per_second(out.bonds, out.result.force_evaluations, out.result.wall_seconds),
+      thread_count());
+  for (const auto& [name, value] : out.probes) {
+    fmt::print("  probe {:<20} {:.9g}\n", name, value);
+  }
+  if (!a.out_dir.empty()) {
+    fmt::print("results in {}/summary.json\n", a.out_dir);
+  }
+  if (!out.checkpoint.empty()) {
+    fmt::print(
+        "checkpoint {} (step {}); to continue: pd run {} -o {} --restart {}{}\n",
+        out.checkpoint.string(), out.checkpoint_step, a.scene, a.out_dir, out.checkpoint.string(),
+        a.checkpoint_every > 0 ? fmt::format(" --checkpoint-every {}", a.checkpoint_every) : "");
+  }
+}
+
+int run(const RunArgs& a) {
+  if (a.print_defaults) {
+    fmt::print("{}", scene_template());
+    return 0;
+  }
+  if (a.scene.empty()) {
+    fmt::print(stderr, "error: pd run needs a scene file (or --print-defaults)\n");
+    return 1;
+  }
+  set_threads(a.threads);
+  const Scene scene = load_or_explain(a.scene);
+  RunOptions opt;
+  opt.output_dir = a.out_dir;
+  opt.progress = ::isatty(STDERR_FILENO) != 0;
+  opt.checkpoint_every = a.checkpoint_every;
+  opt.checkpoint = a.checkpoint;
+  opt.restart = a.restart;
+  const RunOutcome out = run_scene(scene, opt);
+  print_report(a, out);
+  if (!out.checkpoint_note.empty()) {
+    fmt::print(stderr, "warning: {}\n", out.checkpoint_note);
+  }
+  if (out.result.status == RunStatus::unstable) {
+    fmt::print(stderr, "error: {}\n", out.result.message);
+    return 3;
+  }
+  return 0;
+}
+
+} // namespace
+
+Command add_run_command(CLI::App& app) {
+  auto a = std::make_shared<RunArgs>();
+  auto* cmd =
+      app.add_subcommand("run", "Run a scene: writes DIR/summary.json, probes.csv and VTU files");
+  cmd->add_option("scene", a->scene, "scene file (YAML)");
+  cmd->add_option("-o,--output", a->out_dir, "output folder")->capture_default_str();
+  add_threads_option(*cmd, a->threads);
+  cmd->add_flag("--print-defaults", a->print_defaults, "print a commented scene template and exit");
+  cmd->add_option("--checkpoint-every", a->checkpoint_every,
+                  "write the complete run state every N steps (atomically; also at the end and "
+                  "on Ctrl-C)");
+  cmd->add_option("--checkpoint", a->checkpoint,
+                  "checkpoint file (default: OUTDIR/checkpoint.pdcp)");
+  cmd->add_option("--restart", a->restart,
+                  "continue from a checkpoint of the same scene; the result is bitwise that of an "
+                  "uninterrupted run")
+      ->check(CLI::ExistingFile);
+  return {cmd, [a] { return run(*a); }};
+}
+
+} // namespace pd::cli

@@ -1,0 +1,102 @@
+// pd verify [CASE...] [-o DIR] [--list] [--sweep] [--scenes DIR] [--threads N]
+// Verification cases with their gates: CASE.json in DIR for each, exit code 2 if a gate fails.
+#include "commands.hpp"
+#include "libpd/core/atomic_file.hpp"
+#include "verification.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <fmt/format.h>
+#include <memory>
+#include <unistd.h>
+#include <vector>
+
+namespace pd::cli {
+
+namespace {
+
+struct VerifyArgs {
+  std::vector<std::string> cases;
+  std::string out_dir = "verification-out";
+  bool list = false;
+  bool sweep = false;
+  std::string scenes_dir;
+  int threads = 0;
+};
+
+/// Run one case, write its JSON and say whether its gate passed.
+bool run_case(const verification::Case& c, const verification::Context& ctx,
+              const std::string& out_dir) {
+  fmt::print("== {} — {}\n", c.name, c.summary);
+  std::fflush(stdout);
+  const auto t0 = std::chrono::steady_clock::now();
+  Json result = c.run(ctx);
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  result["wall_seconds"] = wall;
+  write_file_atomically(std::filesystem::path(out_dir) / (c.name + ".json"), result.dump());
+  const Json* verdict = result.find("passed");
+  const bool passed = verdict != nullptr && verdict->boolean().value_or(false);
+  fmt::print("   {} in {:.1f} s -> {}/{}.json\n", passed ? "PASSED" : "FAILED", wall, out_dir,
+             c.name);
+  return passed;
+}
+
+int verify(const VerifyArgs& a) {
+  set_threads(a.threads);
+  const auto& cases = verification::all_cases();
+  if (a.list) {
+    for (const auto& c : cases) {
+      fmt::print("{:<20} {}\n", c.name, c.summary);
+    }
+    return 0;
+  }
+  verification::Context ctx;
+  ctx.scenes_dir = a.scenes_dir.empty() ? verification::default_scenes_dir()
+                                        : std::filesystem::path(a.scenes_dir);
+  ctx.output_dir = a.out_dir;
+  ctx.progress = ::isatty(STDERR_FILENO) != 0;
+  std::vector<const verification::Case*> selected;
+  for (const auto& case_name : a.cases) {
+    // --sweep runs each named case's accuracy-vs-time sweep, the case CASE-sweep.
+    const std::string name = a.sweep ? case_name + "-sweep" : case_name;
+    auto it =
+        std::find_if(cases.begin(), cases.end(), [&](const auto& c) { return c.name == name; });
+    if (it == cases.end()) {
+      fmt::print(stderr, "error: unknown verification case '{}' (see pd verify --list)\n", name);
+      return 1;
+    }
+    selected.push_back(&*it);
+  }
+  if (selected.empty()) {
+    for (const auto& c : cases) {
+      selected.push_back(&c);
+    }
+  }
+  int failed = 0;
+  for (const auto* c : selected) {
+    if (!run_case(*c, ctx, a.out_dir)) {
+      ++failed;
+    }
+  }
+  fmt::print("{} passed, {} failed\n", selected.size() - static_cast<std::size_t>(failed), failed);
+  return failed > 0 ? 2 : 0;
+}
+
+} // namespace
+
+Command add_verify_command(CLI::App& app) {
+  auto a = std::make_shared<VerifyArgs>();
+  auto* cmd = app.add_subcommand("verify", "Run verification cases; exit code 2 if a gate fails");
+  cmd->add_option("cases", a->cases, "case names (default: all)");
+  cmd->add_option("-o,--output", a->out_dir, "output folder")->capture_default_str();
+  cmd->add_flag("--list", a->list, "list the cases");
+  cmd->add_flag("--sweep", a->sweep,
+                "run the accuracy-vs-time sweep of each named case (the case CASE-sweep): one "
+                "JSON row per run in DIR/CASE-sweep.jsonl");
+  cmd->add_option("--scenes", a->scenes_dir, "folder with the shipped scenes");
+  add_threads_option(*cmd, a->threads);
+  return {cmd, [a] { return verify(*a); }};
+}
+
+} // namespace pd::cli

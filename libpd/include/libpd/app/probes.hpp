@@ -1,0 +1,38 @@
+// Probes of a run: the scene's probe specs bound to particles, their values on a simulation, and
+// the history of those values that becomes probes.csv.
+#pragma once
+
+#include "libpd/io/scene.hpp"
+#include "libpd/time/simulation.hpp"
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace pd {
+
+/// A probe bound to particles: the mean of one displacement component over them.
+struct ResolvedProbe {
+  std::string name;
+  int component = 0;
+  std::vector<std::uint32_t> particles;
+};
+
+std::vector<ResolvedProbe> resolve_probes(const std::vector<ProbeSpec>& probes, const Model& model);
+double probe_value(const ResolvedProbe& probe, const Simulation& sim);
+
+struct ProbeHistory {
+  std::vector<double> time;
+  std::vector<std::vector<double>> values; ///< one row per sample, one column per probe
+
+  /// Append the probes' values at the simulation's current time.
+  void record(const std::vector<ResolvedProbe>& probes, const Simulation& sim);
+  /// The rows whose values are all finite: after an instability the last rows may hold huge
+  /// (but finite) values, and a file written from this never carries NaN or inf.
+  ProbeHistory finite_rows() const;
+};
+
+/// probes.csv: a `time` column, then one column per probe.
+std::string probes_csv(const std::vector<ResolvedProbe>& probes, const ProbeHistory& history);
+
+} // namespace pd

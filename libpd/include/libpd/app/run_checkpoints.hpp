@@ -1,0 +1,65 @@
+// The checkpoint policy of a run: which file, how often, what makes two runs the same
+// (the fingerprint), and what a checkpoint carries beside the simulation's state (the probe
+// history and the VTU frames written so far). The file format itself is io/checkpoint.hpp.
+#pragma once
+
+#include "libpd/app/probes.hpp"
+#include "libpd/app/run_options.hpp"
+#include "libpd/app/run_output.hpp"
+#include "libpd/io/checkpoint.hpp"
+#include "libpd/io/scene.hpp"
+#include "libpd/time/simulation.hpp"
+
+#include <cstddef>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace pd {
+
+/// What makes a run, for checkpoints: sizes, Δt, integrator, kernel, effects, damping, ramp, probes
+/// and a hash of the model's arrays (positions, volumes, bonds, bond parameters, supports, loads).
+/// Stop criteria (end_time, max_steps, steady) and output settings other than history_every are
+/// left out, so a restart may extend a run.
+CheckpointFingerprint run_fingerprint(const Scene& scene, const Simulation& sim,
+                                      const std::vector<ResolvedProbe>& probes);
+
+/// Default checkpoint path of a run: options.checkpoint, else output_dir/checkpoint.pdcp (empty
+/// if neither is set).
+std::filesystem::path checkpoint_path(const RunOptions& options);
+
+class CheckpointPolicy {
+public:
+  /// Refuses up front (CheckpointError) what cannot be continued bitwise, rather than after
+  /// hours: checkpoints without a file, and any checkpoint option when the integrator gives a
+  /// `refusal` (why its state cannot be saved).
+  CheckpointPolicy(const RunOptions& options, std::string refusal);
+
+  const std::filesystem::path& file() const { return file_; }
+  std::size_t every() const { return every_; }
+  const std::string& refusal() const { return refusal_; }
+
+  /// A periodic checkpoint after this step.
+  bool due(std::size_t step) const { return every_ > 0 && step % every_ == 0; }
+  /// A checkpoint of the final state: Ctrl-C loses nothing, and a finished run can be extended
+  /// (restart with a later end_time). An unstable state is never saved; the last good checkpoint
+  /// stays.
+  bool wanted_at_end(RunStatus status) const;
+
+  /// Write the simulation's state with the run's record so far.
+  void save(const CheckpointFingerprint& fingerprint, const Simulation& sim,
+            const ProbeHistory& history, const std::vector<VtuFrame>& frames) const;
+  /// Read `path` (which must match `fingerprint`) into the simulation and the run's record
+  /// (a history of `probe_count` columns).
+  static void restore(const std::filesystem::path& path, const CheckpointFingerprint& fingerprint,
+                      std::size_t probe_count, Simulation& sim, ProbeHistory& history,
+                      std::vector<VtuFrame>& frames);
+
+private:
+  std::filesystem::path file_;
+  std::size_t every_ = 0;
+  bool file_given_ = false;
+  std::string refusal_;
+};
+
+} // namespace pd

@@ -1,0 +1,29 @@
+// What a caller asks of a run of a scene: where to write, what to show, when to checkpoint and
+// what to continue from. Its own header so that the run's parts (checkpoint policy, output) read
+// it without depending on the run itself.
+#pragma once
+
+#include <cstddef>
+#include <filesystem>
+
+namespace pd {
+
+struct RunOptions {
+  std::filesystem::path output_dir; ///< empty: write nothing
+  bool progress = false;            ///< progress line on stderr
+  bool write_vtu = true;
+  bool stop_on_interrupt = true; ///< SIGINT ends the run cleanly with status `interrupted`
+  bool keep_final_field = false; ///< return reference positions and final displacements
+  /// Checkpoints (checkpoint.hpp): the complete run state every `checkpoint_every` steps (0:
+  /// never), at the end of such a run, and when SIGINT interrupts any run that has a checkpoint
+  /// path. The path is `checkpoint`, or output_dir/checkpoint.pdcp if that is empty.
+  std::size_t checkpoint_every = 0;
+  std::filesystem::path checkpoint;
+  /// Continue from this checkpoint: it must fingerprint-match the scene (same model, Δt,
+  /// integrator, probes); only when the run stops (end_time, max_steps, steady) and the VTU output
+  /// may differ. The restored probe history continues, so probes.csv ends as an uninterrupted
+  /// run's.
+  std::filesystem::path restart;
+};
+
+} // namespace pd

@@ -1,0 +1,45 @@
+// What a run of a scene returns: the integrator's result, sizes, probes, the summary and the
+// checkpoints written.
+#pragma once
+
+#include "libpd/app/probes.hpp"
+#include "libpd/core/geometry.hpp"
+#include "libpd/core/json.hpp"
+#include "libpd/time/simulation.hpp"
+
+#include <cstddef>
+#include <filesystem>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace pd {
+
+struct RunOutcome {
+  RunResult result;
+  double setup_seconds = 0;
+  std::size_t particles = 0;
+  std::size_t bonds = 0;
+  std::map<std::string, double> probes;
+  ProbeHistory history;
+  Json summary;
+  /// With RunOptions::keep_final_field: reference positions and final displacements (3 per
+  /// particle), e.g. to extract deflection lines.
+  std::vector<Vec3> positions;
+  std::vector<double> displacement;
+  std::filesystem::path checkpoint; ///< last checkpoint written (empty: none)
+  std::size_t checkpoint_step = 0;  ///< its step
+  std::size_t checkpoints_written = 0;
+  std::optional<std::size_t> restarted_from_step; ///< set when RunOptions::restart was used
+  std::string checkpoint_note; ///< why no checkpoint was written on interrupt, if none was
+};
+
+/// bond updates per second: one update = one bond's force computed once per evaluation,
+/// whatever the storage (the CSR gather computes each bond from both ends but counts it once).
+inline double bond_updates_per_second(std::size_t bonds, std::size_t evaluations, double seconds) {
+  return seconds > 0 ? static_cast<double>(bonds) * static_cast<double>(evaluations) / seconds
+                     : 0.0;
+}
+
+} // namespace pd

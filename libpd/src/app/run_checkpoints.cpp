@@ -1,0 +1,159 @@
+// The checkpoint policy of a run: fingerprint, file, frequency, and the run's record beside the
+// simulation's state.
+#include "libpd/app/run_checkpoints.hpp"
+
+#include <fmt/format.h>
+
+namespace pd {
+
+namespace {
+
+std::string hex(std::uint64_t v) {
+  return fmt::format("{:016x}", v);
+}
+
+/// Everything build_model derived from the scene that the forces, the integrator and the
+/// constraints read; two runs with equal hashes integrate the same equations.
+std::uint64_t model_hash(const Model& m) {
+  Fnv1a h;
+  h.add_vector(m.particles.position);
+  h.add_vector(m.particles.volume);
+  h.add_vector(m.particles.material);
+  h.add_vector(m.density);
+  h.add_vector(m.family.offsets);
+  h.add_vector(m.family.neighbour);
+  h.add_vector(m.family.inverse_length);
+  h.add_value(m.field.stiffness);
+  h.add_value(m.field.critical_stretch);
+  h.add_value(m.field.yield_stretch);
+  h.add_vector(m.field.bond_stiffness);
+  h.add_vector(m.field.bond_critical_stretch);
+  h.add_vector(m.field.bond_yield_stretch);
+  h.add_value(static_cast<std::uint64_t>(m.constraints.size()));
+  for (const Constraint& c : m.constraints) { // field by field: the struct has padding
+    h.add_value(c.particle);
+    h.add_value(c.component);
+    h.add_value(c.value);
+    h.add_value(c.mirror_of);
+    h.add_value(c.mirror_sign);
+  }
+  h.add_vector(m.external_force_density);
+  return h.value();
+}
+
+void save_history(CheckpointWriter& w, const ProbeHistory& history,
+                  const std::vector<VtuFrame>& frames) {
+  w.section("HIST");
+  w.doubles(history.time);
+  for (const auto& row : history.values) {
+    w.doubles(row);
+  }
+  w.section("VTUF");
+  w.u64(frames.size());
+  for (const auto& [t, name] : frames) {
+    w.f64(t);
+    w.string(name);
+  }
+}
+
+void restore_history(CheckpointReader& r, std::size_t columns, ProbeHistory& history,
+                     std::vector<VtuFrame>& frames) {
+  r.section("HIST");
+  history.time = r.doubles();
+  history.values.clear();
+  for (std::size_t k = 0; k < history.time.size(); ++k) {
+    history.values.push_back(r.doubles(columns, "a probe history row"));
+  }
+  r.section("VTUF");
+  const std::uint64_t n = r.u64();
+  frames.clear();
+  for (std::uint64_t k = 0; k < n; ++k) {
+    const double t = r.f64();
+    frames.push_back({t, r.string()});
+  }
+  r.finish();
+}
+
+} // namespace
+
+std::filesystem::path checkpoint_path(const RunOptions& options) {
+  if (!options.checkpoint.empty()) {
+    return options.checkpoint;
+  }
+  return options.output_dir.empty() ? std::filesystem::path{}
+                                    : options.output_dir / "checkpoint.pdcp";
+}
+
+CheckpointFingerprint run_fingerprint(const Scene& scene, const Simulation& sim,
+                                      const std::vector<ResolvedProbe>& probes) {
+  const Model& m = sim.model();
+  CheckpointFingerprint f;
+  f.scene = scene.path.empty() ? scene.title : scene.path;
+  f.add("dimension", std::to_string(m.spec.dimension.dim));
+  f.add("particles", std::to_string(m.size()));
+  f.add("bonds", std::to_string(m.family.bond_count()));
+  f.add("integrator", sim.integrator().name());
+  if (scene.solver.integrator == IntegratorKind::arkode) {
+    const ArkodeSpec& a = scene.solver.arkode;
+    f.add("arkode", fmt::format("adaptive={} rtol={} atol={} issue_311_workaround={}", a.adaptive,
+                                exact_text(a.rtol), exact_text(a.atol), a.issue_311_workaround));
+  }
+  f.add("kernel", sim.forces().description());
+  std::string effects;
+  for (const auto& e : m.effects.names()) {
+    effects += (effects.empty() ? "" : ",") + e;
+  }
+  f.add("effects", effects);
+  f.add("dt", exact_text(sim.dt()));
+  f.add("damping", exact_text(scene.solver.damping));
+  f.add("ramp_time", exact_text(scene.solver.ramp_time));
+  f.add("model_hash", hex(model_hash(m)));
+  Fnv1a ph;
+  std::string names;
+  for (const auto& p : probes) {
+    names += (names.empty() ? "" : ",") + p.name;
+    ph.add_value(p.component);
+    ph.add_vector(p.particles);
+  }
+  f.add("probes", names + " #" + hex(ph.value()));
+  f.add("history_every", std::to_string(scene.output.history_every));
+  return f;
+}
+
+CheckpointPolicy::CheckpointPolicy(const RunOptions& options, std::string refusal)
+    : file_(checkpoint_path(options)), every_(options.checkpoint_every),
+      file_given_(!options.checkpoint.empty()), refusal_(std::move(refusal)) {
+  if (every_ > 0 && file_.empty()) {
+    throw CheckpointError("checkpoints need a file: give an output folder or a checkpoint path");
+  }
+  if (!refusal_.empty() && (every_ > 0 || file_given_ || !options.restart.empty())) {
+    throw CheckpointError(fmt::format("cannot checkpoint this run: {}", refusal_));
+  }
+}
+
+bool CheckpointPolicy::wanted_at_end(RunStatus status) const {
+  if (status == RunStatus::unstable || file_.empty()) {
+    return false;
+  }
+  return status == RunStatus::interrupted || every_ > 0 || file_given_;
+}
+
+void CheckpointPolicy::save(const CheckpointFingerprint& fingerprint, const Simulation& sim,
+                            const ProbeHistory& history,
+                            const std::vector<VtuFrame>& frames) const {
+  CheckpointWriter w;
+  sim.save(w);
+  save_history(w, history, frames);
+  write_checkpoint(file_, fingerprint, w);
+}
+
+void CheckpointPolicy::restore(const std::filesystem::path& path,
+                               const CheckpointFingerprint& fingerprint, std::size_t probe_count,
+                               Simulation& sim, ProbeHistory& history,
+                               std::vector<VtuFrame>& frames) {
+  CheckpointReader reader = read_checkpoint(path, fingerprint);
+  sim.restore(reader);
+  restore_history(reader, probe_count, history, frames);
+}
+
+} // namespace pd

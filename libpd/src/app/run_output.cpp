@@ -1,0 +1,65 @@
+// The files a run leaves in its output folder (VTU frames, particles.pvd, probes.csv,
+// summary.json).
+#include "libpd/app/run_output.hpp"
+
+#include "libpd/core/atomic_file.hpp"
+#include "libpd/io/output.hpp"
+
+#include <fmt/format.h>
+
+namespace pd {
+
+RunOutputWriter::RunOutputWriter(const RunOptions& options, const OutputSpec& output,
+                                 const std::vector<ResolvedProbe>& probes)
+    : dir_(options.output_dir), vtu_(!dir_.empty() && options.write_vtu && output.vtu),
+      vtu_every_(output.vtu_every), history_(!dir_.empty() && output.history_every > 0),
+      probes_(probes) {}
+
+void RunOutputWriter::frame_if_due(const Simulation& sim) {
+  if (vtu_ && vtu_every_ > 0 && sim.state().step % vtu_every_ == 0) {
+    write_frame(sim);
+  }
+}
+
+void RunOutputWriter::flush_probes_if_stale(const ProbeHistory& history) {
+  if (history_ && std::chrono::steady_clock::now() - last_flush_ > std::chrono::seconds(5)) {
+    write_probes(history);
+  }
+}
+
+void RunOutputWriter::write_probes(const ProbeHistory& history) {
+  if (!history_) {
+    return;
+  }
+  write_file_atomically(dir_ / "probes.csv", probes_csv(probes_, history));
+  last_flush_ = std::chrono::steady_clock::now();
+}
+
+void RunOutputWriter::write_final(const Simulation& sim, bool unstable, const ProbeHistory& history,
+                                  const Json& summary) {
+  if (dir_.empty()) {
+    return;
+  }
+  if (!unstable && vtu_) {
+    write_frame(sim);
+  }
+  if (history_) {
+    write_file_atomically(dir_ / "probes.csv", probes_csv(probes_, history.finite_rows()));
+  }
+  write_file_atomically(dir_ / "summary.json", summary.dump());
+}
+
+void RunOutputWriter::write_frame(const Simulation& sim) {
+  const std::string name = fmt::format("particles-{:08d}.vtu", sim.state().step);
+  write_vtu(dir_ / name, sim);
+  frames_.push_back({sim.state().time, name});
+  std::string pvd =
+      "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n";
+  for (const auto& [t, f] : frames_) {
+    pvd += fmt::format("<DataSet timestep=\"{}\" file=\"{}\"/>\n", t, f);
+  }
+  pvd += "</Collection>\n</VTKFile>\n";
+  write_file_atomically(dir_ / "particles.pvd", pvd);
+}
+
+} // namespace pd

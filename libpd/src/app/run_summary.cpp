@@ -1,0 +1,61 @@
+// summary.json of a run.
+#include "libpd/app/run_summary.hpp"
+
+namespace pd {
+
+Json run_summary(const Scene& scene, const Simulation& sim, const RunOutcome& out,
+                 const RunOptions& options) {
+  const Model& model = sim.model();
+  Json j;
+  j["scene"] = scene.path;
+  j["title"] = scene.title;
+  j["status"] = to_string(out.result.status);
+  if (!out.result.message.empty()) {
+    j["message"] = out.result.message;
+  }
+  j["dimension"] = scene.model.dimension.dim;
+  j["particles"] = out.particles;
+  j["bonds"] = out.bonds;
+  j["bonds_per_particle"] =
+      2.0 * static_cast<double>(out.bonds) / static_cast<double>(out.particles);
+  j["horizon"] = model.horizon();
+  j["spacing"] = scene.model.lattice.spacing;
+  j["integrator"] = to_string(scene.solver.integrator);
+  j["kernel"] = sim.forces().description();
+  j["effects"] = Json::array_of(model.effects.names());
+  j["steps"] = out.result.steps;
+  j["time"] = out.result.time;
+  j["dt"] = out.result.dt;
+  j["dt_stable"] = out.result.dt_stable;
+  j["force_evaluations"] = out.result.force_evaluations;
+  j["setup_seconds"] = out.setup_seconds;
+  j["wall_seconds"] = out.result.wall_seconds;
+  j["bond_updates"] =
+      static_cast<double>(out.bonds) * static_cast<double>(out.result.force_evaluations);
+  j["bond_updates_per_second"] =
+      bond_updates_per_second(out.bonds, out.result.force_evaluations, out.result.wall_seconds);
+  j["kinetic_energy"] = out.result.kinetic_energy;
+  j["strain_energy"] = out.result.strain_energy;
+  j["residual"] = out.result.residual;
+  j["memory_bytes"] = model.memory_bytes();
+  Json& pj = j["probes"];
+  pj = Json::object();
+  for (const auto& [name, value] : out.probes) {
+    pj[name] = value;
+  }
+  if (!scene.warnings.empty()) {
+    j["warnings"] = Json::array_of(scene.warnings);
+  }
+  if (!out.checkpoint.empty()) {
+    j["checkpoint"] = out.checkpoint.string();
+    j["checkpoint_step"] = out.checkpoint_step;
+  }
+  if (out.restarted_from_step) {
+    Json& rj = j["restarted_from"];
+    rj["file"] = options.restart.string();
+    rj["step"] = *out.restarted_from_step;
+  }
+  return j;
+}
+
+} // namespace pd
