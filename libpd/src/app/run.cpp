@@ -196,7 +196,7 @@ RunOutcome run_scene(const Scene& scene, const RunOptions& options) {
   using clock = std::chrono::steady_clock;
   const auto t0 = clock::now();
   RunOutcome out;
-  Model model = build_model(scene.model);
+  Model model = build_model(scene);
   Simulation sim(model, scene.solver, scene.initial);
   const auto probes = resolve_probes(scene.probes, model);
   out.particles = model.size();

@@ -85,12 +85,8 @@ std::vector<double> isotropic_surface_factors(const ModelSpec& spec, const Parti
 /// Names as written in scene files.
 const char* to_string(SurfaceCorrection s);
 const char* to_string(VolumeCorrection v);
-inline constexpr std::array<SurfaceCorrection, 5> all_surface_corrections{
-    SurfaceCorrection::none, SurfaceCorrection::volume, SurfaceCorrection::energy,
-    SurfaceCorrection::macek_silling, SurfaceCorrection::tensor};
-inline constexpr std::array<VolumeCorrection, 4> all_volume_corrections{
-    VolumeCorrection::none, VolumeCorrection::linear, VolumeCorrection::exact,
-    VolumeCorrection::moment};
+inline constexpr auto all_surface_corrections = enum_values<SurfaceCorrection>();
+inline constexpr auto all_volume_corrections = enum_values<VolumeCorrection>();
 
 /// All names in enum order (index = enum value), for tables over every combination.
 std::array<const char*, all_surface_corrections.size()> surface_correction_names();

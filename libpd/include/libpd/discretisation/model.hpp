@@ -2,6 +2,7 @@
 // supports and loads. Built once from a ModelSpec (normally read from a scene file).
 #pragma once
 
+#include "libpd/core/names.hpp"
 #include "libpd/discretisation/bond_family.hpp"
 #include "libpd/physics/effects.hpp"
 #include "libpd/discretisation/lattice.hpp"
@@ -23,6 +24,28 @@ enum class SurfaceCorrection { none, volume, energy, macek_silling, tensor };
 /// horizon (`linear`, `exact`), or lattice weights that reproduce the continuum's fourth moments
 /// (`moment`, see corrections.hpp).
 enum class VolumeCorrection { none, linear, exact, moment };
+
+template <>
+struct EnumName<SurfaceCorrection> {
+  static constexpr NameTable<SurfaceCorrection, 5> table{{
+      {"none", SurfaceCorrection::none, "no correction"},
+      {"volume", SurfaceCorrection::volume, "volume method"},
+      {"energy", SurfaceCorrection::energy, "energy method"},
+      {"macek-silling", SurfaceCorrection::macek_silling,
+       "classical over PD energy density under isotropic expansion"},
+      {"tensor", SurfaceCorrection::tensor, "tensor method"},
+  }};
+};
+
+template <>
+struct EnumName<VolumeCorrection> {
+  static constexpr NameTable<VolumeCorrection, 4> table{{
+      {"none", VolumeCorrection::none, "full neighbour volumes"},
+      {"linear", VolumeCorrection::linear, "partial volume of cut cells, linear in the distance"},
+      {"exact", VolumeCorrection::exact, "partial volume of cut cells, exact"},
+      {"moment", VolumeCorrection::moment, "moment-matched lattice weights"},
+  }};
+};
 
 /// Bond stiffness and strengths. Either one value for the whole body (uniform) or one value per
 /// directed bond (per-bond field): the kernel is compiled for one of the two.
@@ -61,6 +84,17 @@ struct BoxRegionLoad {
   enum class Kind { total, per_area, per_length, body } kind = Kind::total;
   Vec3 value{0, 0, 0};
   double measure = 1; ///< area [m²] or length [m] for per_area / per_length
+};
+
+template <>
+struct EnumName<BoxRegionLoad::Kind> {
+  using Kind = BoxRegionLoad::Kind;
+  static constexpr NameTable<Kind, 4> table{{
+      {"total", Kind::total, "total force [N] spread over the region"},
+      {"per_area", Kind::per_area, "traction [N/m²] on the loaded area"},
+      {"per_length", Kind::per_length, "line load [N/m] on the loaded length"},
+      {"body", Kind::body, "body force density [N/m³]"},
+  }};
 };
 
 struct SupportSpec {
@@ -138,6 +172,8 @@ std::vector<Constraint> support_constraints(const ModelSpec& spec, const Particl
 /// Build particles, families, bond parameters, supports and loads.
 /// Throws std::runtime_error for inconsistent specs that the scene checker did not catch.
 Model build_model(const ModelSpec& spec);
+/// The same on particles already generated from spec's dimension, lattice and bodies.
+Model build_model(const ModelSpec& spec, ParticleSet particles);
 
 /// Bond stiffness of directed bond k, c_ij·V_j·corrections, whichever storage the model uses.
 inline double bond_stiffness(const Model& m, std::size_t k) {
