@@ -222,9 +222,7 @@ int cmd_bench(const std::string& scene_path, std::size_t steps, int threads, boo
   set_threads(threads);
   pd::Scene scene = load_or_explain(scene_path);
   if (!stretch.empty()) {
-    scene.model.effects.stretch = stretch == "exact"      ? pd::StretchKind::exact
-                                  : stretch == "modified" ? pd::StretchKind::modified
-                                                          : pd::StretchKind::fast;
+    scene.model.effects.stretch = *pd::from_name<pd::StretchKind>(stretch);
   }
   pd::Model model = pd::build_model(scene.model);
   auto forces = pd::make_force_evaluator(model);
@@ -326,22 +324,17 @@ int cmd_verify(const std::vector<std::string>& names, const std::string& out_dir
 
 std::optional<pd::StabilityTarget> parse_target(const std::string& word) {
   pd::StabilityTarget t;
-  if (word == "verlet") {
-    t.kind = pd::IntegratorKind::verlet;
-    return t;
-  }
-  if (word == "euler-cromer" || word == "damped-euler") {
-    t.kind = word == "euler-cromer" ? pd::IntegratorKind::euler_cromer
-                                    : pd::IntegratorKind::damped_euler;
+  // Fixed-step integrators by their own word; adr has no stable step to measure.
+  if (const auto kind = pd::from_name<pd::IntegratorKind>(word);
+      kind && *kind != pd::IntegratorKind::adr && *kind != pd::IntegratorKind::arkode) {
+    t.kind = *kind;
     return t;
   }
   const std::string name = word.starts_with("arkode:") ? word.substr(7) : word;
-  for (int i = 0; i < pd::arkode_table_count; ++i) {
-    if (pd::to_string(static_cast<pd::ArkodeTable>(i)) == name) {
-      t.kind = pd::IntegratorKind::arkode;
-      t.table = static_cast<pd::ArkodeTable>(i);
-      return t;
-    }
+  if (const auto table = pd::from_name<pd::ArkodeTable>(name)) {
+    t.kind = pd::IntegratorKind::arkode;
+    t.table = *table;
+    return t;
   }
   return std::nullopt;
 }
@@ -352,8 +345,8 @@ int cmd_stability(const std::vector<std::string>& scenes, std::vector<std::strin
   if (integrators.empty()) {
     integrators.push_back("verlet");
     if (pd::arkode_available()) {
-      for (int i = 0; i < pd::arkode_table_count; ++i) {
-        integrators.push_back("arkode:" + pd::to_string(static_cast<pd::ArkodeTable>(i)));
+      for (const std::string_view table : pd::enum_words<pd::ArkodeTable>) {
+        integrators.push_back("arkode:" + std::string(table));
       }
     }
   }
@@ -702,7 +695,7 @@ int main(int argc, char** argv) {
   bench->add_option("--repeats", repeats, "repeats; the median is reported")->capture_default_str();
   bench->add_option("--threads", threads, "OpenMP threads (default: all)");
   bench->add_option("--stretch", stretch, "override the stretch measure")
-      ->check(CLI::IsMember({"exact", "modified", "fast"}));
+      ->check(CLI::IsMember(pd::enum_word_list<pd::StretchKind>()));
   bench->add_flag("--json", json, "machine-readable output");
 
   std::vector<std::string> cases;

@@ -6,7 +6,7 @@
 // A table is declared by specialising `EnumName`:
 //
 //   template <> struct EnumName<StretchKind> {
-//     static constexpr NameTable<StretchKind, 3> table{{{"exact", StretchKind::exact, "eq. 6"}, ...}};
+//     static constexpr NameTable<StretchKind, 3> table{{{"exact", StretchKind::exact, ""}, ...}};
 //   };
 #pragma once
 
@@ -35,7 +35,9 @@ template <class E>
 struct EnumName;
 
 template <class E>
-concept NamedEnum = requires { EnumName<E>::table; };
+concept NamedEnum = requires {
+  EnumName<E>::table;
+};
 
 /// The word of a value ("?" if the table lacks it, which only a cast of a bad integer can do).
 template <NamedEnum E>

@@ -35,7 +35,7 @@ template <class T>
 void store_value(const Reader& r, const Fields& f, std::string_view key, T& field) {
   if constexpr (std::same_as<T, std::optional<double>>) {
     field = key_of(*f.schema, key).type == Type::number_or_auto ? r.number_or_auto(f, key)
-                                                                 : r.number(f, key);
+                                                                : r.number(f, key);
   } else if constexpr (std::same_as<T, double>) {
     if (auto v = r.number(f, key)) {
       field = *v;
@@ -92,7 +92,6 @@ std::string yaml_text(const T& value) {
     return std::string(name_of(value));
   }
 }
-
 
 /// Store the key in `Struct{}.*Path...` (the first member pointer names the struct).
 template <auto First, auto... Rest>

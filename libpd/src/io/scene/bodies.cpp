@@ -8,31 +8,15 @@ namespace pd::scene {
 namespace {
 
 constexpr Key body_keys[] = {
-    {.name = "name",
-     .type = Type::string,
-     .doc = "unique name of the body",
-     .example = "bar",
-     .need = Need::required},
+    name_key("unique name of the body", "bar"),
     {.name = "material",
      .type = Type::string,
      .doc = "name of one of the materials",
      .example = "steel",
      .need = Need::required},
-    {.name = "box",
-     .type = Type::box,
-     .doc = "region [[lo], [hi]] filled with lattice particles",
-     .unit = "m",
-     .example = "[[0, 0, 0], [1, 0.1, 0.1]]",
-     .need = Need::one_of,
-     .group = 1},
-    {.name = "boxes",
-     .type = Type::boxes,
-     .doc = "instead of box: a union of boxes",
-     .unit = "m",
-     .example = "[[[0, 0, 0], [0.5, 0.1, 0.1]], [[0.5, 0, 0], [1, 0.1, 0.1]]]",
-     .need = Need::one_of,
-     .group = 1,
-     .show = Show::commented},
+    box_key("region [[lo], [hi]] filled with lattice particles", "[[0, 0, 0], [1, 0.1, 0.1]]"),
+    boxes_key("instead of box: a union of boxes",
+              "[[[0, 0, 0], [0.5, 0.1, 0.1]], [[0.5, 0, 0], [1, 0.1, 0.1]]]"),
 };
 
 } // namespace
@@ -70,8 +54,7 @@ void read_bodies(Reader& r, ModelSpec& model, Marks& marks) {
     const Reader::RegionRead region = r.region(f);
     body.region = region.region;
     marks.must_have_particles.push_back(
-        {body.region, region.node,
-         fmt::format("body '{}' contains no lattice point", body.name)});
+        {body.region, region.node, fmt::format("body '{}' contains no lattice point", body.name)});
     marks.body_box_nodes.push_back(region.box_nodes);
     model.bodies.push_back(std::move(body));
   }

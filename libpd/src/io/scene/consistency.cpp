@@ -63,7 +63,7 @@ void check_solver(Reader& r, const Scene& scene, const Marks& marks) {
            fmt::format("'solver.damping' is {} but the 'damping' effect is not listed",
                        format_number(solver.damping)),
            marks.top.has("effects") ? "add 'damping' to 'effects', or set 'damping: 0'"
-                              : "add 'effects: [damping]', or set 'damping: 0'");
+                                    : "add 'effects: [damping]', or set 'damping: 0'");
   }
   if (model.effects.damping && !(solver.damping > 0)) {
     r.fail(marks.damping_effect, "effect 'damping' is listed but 'solver.damping' is 0",

@@ -50,7 +50,6 @@ SceneError::SceneError(std::string file, SourceMark mark, const std::string& wha
     : std::runtime_error(format_error(file, mark, what, hint)), file_(std::move(file)),
       mark_(mark) {}
 
-
 namespace scene {
 
 namespace {
@@ -145,7 +144,6 @@ std::string malformed_hint(const std::string& msg, const std::string& text, int 
   return "check the indentation (spaces only) and that every bracket and quote is closed";
 }
 
-
 } // namespace
 
 Scene parse(const std::string& text, const std::string& name) {
@@ -195,7 +193,6 @@ Scene parse(const std::string& text, const std::string& name) {
   scene.warnings = std::move(warnings);
   return scene;
 }
-
 
 } // namespace scene
 

@@ -1,9 +1,8 @@
 // Checks of a scene against its lattice: first from the estimate of its size alone (memory,
 // 32-bit indices, coordinates far from 0), then by counting lattice points in regions, and last,
 // for mirror supports only, by generating the particles.
-#include "sections.hpp"
-
 #include "libpd/io/resources.hpp"
+#include "sections.hpp"
 
 #include <algorithm>
 
@@ -49,7 +48,6 @@ double distance_to_box(const Vec3& p, const Box& b, int dim) {
   }
   return std::sqrt(sum);
 }
-
 
 /// Whether a union of boxes holds a lattice point: some box does. Counted per axis in floating
 /// point, so it needs no enumeration and cannot overflow, whatever the box.

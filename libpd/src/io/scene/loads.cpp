@@ -7,26 +7,9 @@ namespace pd::scene {
 namespace {
 
 constexpr Key load_keys[] = {
-    {.name = "name",
-     .type = Type::string,
-     .doc = "unique name of the load",
-     .example = "pull",
-     .need = Need::required},
-    {.name = "box",
-     .type = Type::box,
-     .doc = "region whose particles (of any body) carry the load",
-     .unit = "m",
-     .example = "[[0.99, 0, 0], [1, 0.1, 0.1]]",
-     .need = Need::one_of,
-     .group = 1},
-    {.name = "boxes",
-     .type = Type::boxes,
-     .doc = "instead of box: a union of boxes",
-     .unit = "m",
-     .example = "[[[0.99, 0, 0], [1, 0.1, 0.1]]]",
-     .need = Need::one_of,
-     .group = 1,
-     .show = Show::commented},
+    name_key("unique name of the load", "pull"),
+    box_key("region whose particles (of any body) carry the load", "[[0.99, 0, 0], [1, 0.1, 0.1]]"),
+    boxes_key("instead of box: a union of boxes", "[[[0.99, 0, 0], [1, 0.1, 0.1]]]"),
     {.name = "type",
      .type = Type::choice,
      .doc = "total force [N] spread over the region, or a traction per_area [N/m²], per_length "
@@ -75,12 +58,11 @@ void read_loads(Reader& r, ModelSpec& model, Marks& marks) {
       }
       l.load.measure = *measure;
     } else if (needs_measure) {
-      r.fail(
-          f.anchor,
-          fmt::format("load '{}' of type {} needs 'measure', the loaded {}", l.name,
-                      name_of(l.load.kind),
-                      l.load.kind == BoxRegionLoad::Kind::per_area ? "area [m²]" : "length [m]"),
-          "add e.g. 'measure: 0.01'");
+      r.fail(f.anchor,
+             fmt::format("load '{}' of type {} needs 'measure', the loaded {}", l.name,
+                         name_of(l.load.kind),
+                         l.load.kind == BoxRegionLoad::Kind::per_area ? "area [m²]" : "length [m]"),
+             "add e.g. 'measure: 0.01'");
     }
     marks.must_touch_bodies.push_back(
         {l.load.region, region.node, fmt::format("load '{}' acts on no particle", l.name)});

@@ -172,8 +172,7 @@ const Key& key_of(const Section& s, std::string_view name) {
   throw std::logic_error(fmt::format("scene schema has no key '{}'", name));
 }
 
-void Reader::fail(const YAML::Node& at, const std::string& what,
-                  const std::string& hint) const {
+void Reader::fail(const YAML::Node& at, const std::string& what, const std::string& hint) const {
   throw SceneError(file_, source_mark(at), what, hint);
 }
 
@@ -183,7 +182,7 @@ void Reader::warn(const YAML::Node& at, const std::string& what) {
 }
 
 Fields Reader::open(const YAML::Node& node, const YAML::Node& anchor, const Section& schema,
-            std::string prefix, std::string owner, const std::string& what) const {
+                    std::string prefix, std::string owner, const std::string& what) const {
   Fields f;
   f.schema = &schema;
   f.anchor = node.IsNull() ? anchor : node;
@@ -193,8 +192,7 @@ Fields Reader::open(const YAML::Node& node, const YAML::Node& anchor, const Sect
     return f;
   }
   if (!node.IsMap()) {
-    fail(node,
-         fmt::format("{} must be a map of 'key: value' lines, got {}", what, describe(node)),
+    fail(node, fmt::format("{} must be a map of 'key: value' lines, got {}", what, describe(node)),
          "write one 'key: value' per line, indented under its parent");
   }
   for (auto it = node.begin(); it != node.end(); ++it) {
@@ -211,8 +209,7 @@ Fields Reader::open(const YAML::Node& node, const YAML::Node& anchor, const Sect
       }
     }
     if (spec == nullptr) {
-      fail(k, fmt::format("unknown key '{}' {}", name, f.where()),
-           unknown_key_hint(name, schema));
+      fail(k, fmt::format("unknown key '{}' {}", name, f.where()), unknown_key_hint(name, schema));
     }
     if (const Entry* first = f.find(name)) {
       fail(k, fmt::format("duplicate key '{}' {}", name, f.where()),
@@ -274,7 +271,7 @@ std::vector<YAML::Node> Reader::items(const Fields& f, std::string_view key) con
 }
 
 Fields Reader::item(const YAML::Node& node, const Section& schema, std::string_view kind,
-            std::string_view list, std::size_t index) const {
+                    std::string_view list, std::size_t index) const {
   std::string owner = fmt::format("{} #{} of '{}'", kind, index + 1, list);
   if (node.IsMap() && node["name"] && node["name"].IsScalar()) {
     owner = fmt::format("{} '{}'", kind, node["name"].Scalar());
@@ -295,7 +292,7 @@ std::optional<std::string> Reader::string(const Fields& f, std::string_view key)
 }
 
 double Reader::to_number(const YAML::Node& n, const std::string& label, std::string_view unit,
-                 const std::string& example) const {
+                         const std::string& example) const {
   if (!n.IsScalar()) {
     fail(n, fmt::format("{} must be a number{}, got {}", label, unit_suffix(unit), describe(n)),
          fmt::format("write a number, e.g. {}", example));
@@ -321,7 +318,8 @@ double Reader::to_number(const YAML::Node& n, const std::string& label, std::str
        fmt::format("write a plain number, e.g. {}", example));
 }
 
-void Reader::check_range(const YAML::Node& n, const std::string& label, const Key& k, double v) const {
+void Reader::check_range(const YAML::Node& n, const std::string& label, const Key& k,
+                         double v) const {
   if (!k.range.contains(v)) {
     fail(n,
          fmt::format("{} must be {}{}, got {}", label, range_text(k.range), unit_suffix(k.unit),
@@ -408,7 +406,8 @@ std::optional<int> Reader::choice(const Fields& f, std::string_view key) const {
   return word(e->at(), f.label(key), e->key->choices);
 }
 
-Vec3 Reader::coordinates(const YAML::Node& n, const std::string& label, std::string_view unit) const {
+Vec3 Reader::coordinates(const YAML::Node& n, const std::string& label,
+                         std::string_view unit) const {
   const std::string count = dim == 3 ? "3" : fmt::format("{} to 3", dim);
   const std::string example = dim == 1 ? "[0]" : dim == 2 ? "[0, 0]" : "[0, 0, 0]";
   if (!n.IsSequence()) {
@@ -418,10 +417,8 @@ Vec3 Reader::coordinates(const YAML::Node& n, const std::string& label, std::str
          fmt::format("write it as {}", example));
   }
   if (n.size() < static_cast<std::size_t>(dim) || n.size() > 3) {
-    fail(
-        n,
-        fmt::format("{} has {} coordinates; a {}D scene needs {}", label, n.size(), dim, count),
-        fmt::format("write it as {} (coordinates beyond the dimension may be omitted)", example));
+    fail(n, fmt::format("{} has {} coordinates; a {}D scene needs {}", label, n.size(), dim, count),
+         fmt::format("write it as {} (coordinates beyond the dimension may be omitted)", example));
   }
   Vec3 v{0, 0, 0};
   std::size_t i = 0;
@@ -435,10 +432,9 @@ Vec3 Reader::coordinates(const YAML::Node& n, const std::string& label, std::str
 void Reader::check_in_space(const YAML::Node& n, const std::string& label, const Vec3& v) const {
   for (int c = dim; c < 3; ++c) {
     if (v[c] != 0) {
-      fail(
-          n,
-          fmt::format("{} has a non-zero {} component in a {}D scene", label, axis_names[c], dim),
-          fmt::format("set the {} component to 0 or leave it out", axis_names[c]));
+      fail(n,
+           fmt::format("{} has a non-zero {} component in a {}D scene", label, axis_names[c], dim),
+           fmt::format("set the {} component to 0 or leave it out", axis_names[c]));
     }
   }
 }
@@ -452,7 +448,7 @@ std::optional<Vec3> Reader::vector(const Fields& f, std::string_view key) const 
 }
 
 std::optional<std::array<std::array<double, 3>, 3>> Reader::matrix(const Fields& f,
-                                                           std::string_view key) const {
+                                                                   std::string_view key) const {
   const Entry* e = lookup(f, key);
   if (e == nullptr) {
     return std::nullopt;
@@ -496,8 +492,7 @@ Box Reader::box(const YAML::Node& n, const std::string& label) const {
   b.hi = coordinates(n[1], "upper corner of " + label, "m");
   for (int c = 0; c < 3; ++c) {
     if (b.lo[c] > b.hi[c]) {
-      fail(n,
-           fmt::format("{} has lo > hi in {} ({} > {})", label, axis_names[c], b.lo[c], b.hi[c]),
+      fail(n, fmt::format("{} has lo > hi in {} ({} > {})", label, axis_names[c], b.lo[c], b.hi[c]),
            "the first corner must be the lower one in every coordinate: swap the values");
     }
   }
@@ -561,8 +556,9 @@ std::optional<std::array<bool, 3>> Reader::components(const Fields& f, std::stri
   return out;
 }
 
-std::array<std::optional<double>, 3> Reader::component_values(const Fields& f, std::string_view key,
-                                                      std::array<YAML::Node, 3>& nodes) const {
+std::array<std::optional<double>, 3>
+Reader::component_values(const Fields& f, std::string_view key,
+                         std::array<YAML::Node, 3>& nodes) const {
   std::array<std::optional<double>, 3> out;
   const Entry* e = lookup(f, key);
   if (e == nullptr) {
@@ -651,8 +647,8 @@ std::string Reader::unknown_key_hint(const std::string& name, const Section& sch
       there.push_back(k.name);
     }
     if (const auto guess = closest(name, there); guess && other != &schema) {
-      return fmt::format("did you mean '{}' (a key {})? keys allowed {}: {}", *guess,
-                         other->place, schema.place, join(known, ", "));
+      return fmt::format("did you mean '{}' (a key {})? keys allowed {}: {}", *guess, other->place,
+                         schema.place, join(known, ", "));
     }
   }
   return fmt::format("keys allowed {}: {}", schema.place, join(known, ", "));

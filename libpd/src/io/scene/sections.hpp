@@ -24,6 +24,35 @@ inline constexpr NameTable<bool EffectSet::*, 3> effect_table{{
 }};
 inline constexpr auto effect_words = words_of(effect_table);
 
+/// The `name` key of a list item.
+constexpr Key name_key(std::string_view doc, std::string_view example) {
+  return {
+      .name = "name", .type = Type::string, .doc = doc, .example = example, .need = Need::required};
+}
+
+/// The `box` key of a section with a region, and its alternative `boxes` (group 1: exactly one
+/// of them, read by Reader::region).
+constexpr Key box_key(std::string_view doc, std::string_view example, Show show = Show::active) {
+  return {.name = "box",
+          .type = Type::box,
+          .doc = doc,
+          .unit = "m",
+          .example = example,
+          .need = Need::one_of,
+          .group = 1,
+          .show = show};
+}
+constexpr Key boxes_key(std::string_view doc, std::string_view example) {
+  return {.name = "boxes",
+          .type = Type::boxes,
+          .doc = doc,
+          .unit = "m",
+          .example = example,
+          .need = Need::one_of,
+          .group = 1,
+          .show = Show::commented};
+}
+
 /// A region that the scene must not leave empty, with what to say if it is.
 struct RegionUse {
   Region region;

@@ -116,7 +116,6 @@ void write_section(std::string& out, const Section& s, const std::string& lead, 
   }
 }
 
-
 } // namespace
 
 } // namespace scene

@@ -45,8 +45,7 @@ constexpr Key root_keys[] = {
      .range = positive,
      .only_dim = 1,
      .show = Show::commented,
-     .bind =
-         field_with_default<&Scene::model, &ModelSpec::dimension, &Dimension::cross_section>()},
+     .bind = field_with_default<&Scene::model, &ModelSpec::dimension, &Dimension::cross_section>()},
     {.name = "lattice",
      .type = Type::section,
      .doc = "the particle lattice shared by all bodies",
