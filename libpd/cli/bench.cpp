@@ -54,9 +54,7 @@ int bench(const BenchArgs& a) {
   set_threads(a.threads);
   Scene scene = load_or_explain(a.scene);
   if (!a.stretch.empty()) {
-    scene.model.effects.stretch = a.stretch == "exact"      ? StretchKind::exact
-                                  : a.stretch == "modified" ? StretchKind::modified
-                                                            : StretchKind::fast;
+    scene.model.effects.stretch = *from_name<StretchKind>(a.stretch);
   }
   Model model = build_model(scene.model);
   auto forces = make_force_evaluator(model);
@@ -96,7 +94,7 @@ Command add_bench_command(CLI::App& app) {
       ->capture_default_str();
   add_threads_option(*cmd, a->threads);
   cmd->add_option("--stretch", a->stretch, "override the stretch measure")
-      ->check(CLI::IsMember({"exact", "modified", "fast"}));
+      ->check(CLI::IsMember(enum_word_list<StretchKind>()));
   cmd->add_flag("--json", a->json, "machine-readable output");
   return {cmd, [a] { return bench(*a); }};
 }

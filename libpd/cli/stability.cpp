@@ -30,21 +30,17 @@ struct StabilityArgs {
 
 std::optional<StabilityTarget> parse_target(const std::string& word) {
   StabilityTarget t;
-  if (word == "verlet") {
-    t.kind = IntegratorKind::verlet;
-    return t;
-  }
-  if (word == "euler-cromer" || word == "damped-euler") {
-    t.kind = word == "euler-cromer" ? IntegratorKind::euler_cromer : IntegratorKind::damped_euler;
+  // Fixed-step integrators by their own word; adr has no stable step to measure.
+  if (const auto kind = from_name<IntegratorKind>(word);
+      kind && *kind != IntegratorKind::adr && *kind != IntegratorKind::arkode) {
+    t.kind = *kind;
     return t;
   }
   const std::string name = word.starts_with("arkode:") ? word.substr(7) : word;
-  for (int i = 0; i < arkode_table_count; ++i) {
-    if (to_string(static_cast<ArkodeTable>(i)) == name) {
-      t.kind = IntegratorKind::arkode;
-      t.table = static_cast<ArkodeTable>(i);
-      return t;
-    }
+  if (const auto table = from_name<ArkodeTable>(name)) {
+    t.kind = IntegratorKind::arkode;
+    t.table = *table;
+    return t;
   }
   return std::nullopt;
 }
@@ -55,8 +51,8 @@ std::optional<std::vector<StabilityTarget>> parse_targets(std::vector<std::strin
   if (integrators.empty()) {
     integrators.push_back("verlet");
     if (arkode_available()) {
-      for (int i = 0; i < arkode_table_count; ++i) {
-        integrators.push_back("arkode:" + to_string(static_cast<ArkodeTable>(i)));
+      for (const std::string_view table : enum_words<ArkodeTable>) {
+        integrators.push_back("arkode:" + std::string(table));
       }
     }
   }

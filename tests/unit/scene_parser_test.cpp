@@ -863,7 +863,7 @@ output:
   EXPECT_TRUE(m.effects.damage);
   EXPECT_TRUE(m.effects.plasticity);
   EXPECT_TRUE(m.effects.damping);
-  EXPECT_TRUE(m.effects.body_force);
+  // body_force is not read: build_model derives it from the loads (simulation_test).
   EXPECT_EQ(m.effects.stretch, pd::StretchKind::fast);
   EXPECT_EQ(m.surface_correction, pd::SurfaceCorrection::macek_silling);
   EXPECT_EQ(m.volume_correction, pd::VolumeCorrection::linear);

@@ -41,7 +41,7 @@ private:
   // Setup. The model, its simulation and the probes bound to its particles; the checkpoint
   // policy is checked here, so a run that could not be continued is refused before it starts.
   void setup() {
-    model_ = build_model(scene_.model);
+    model_ = build_model(scene_);
     sim_ = std::make_unique<Simulation>(model_, scene_.solver, scene_.initial);
     probes_ = resolve_probes(scene_.probes, model_);
     out_.particles = model_.size();

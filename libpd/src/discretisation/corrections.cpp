@@ -276,33 +276,11 @@ double uniaxial_stress_energy_moment(const ModelDimension& d, double horizon) {
 }
 
 const char* to_string(SurfaceCorrection s) {
-  switch (s) {
-  case SurfaceCorrection::none:
-    return "none";
-  case SurfaceCorrection::volume:
-    return "volume";
-  case SurfaceCorrection::energy:
-    return "energy";
-  case SurfaceCorrection::macek_silling:
-    return "macek-silling";
-  case SurfaceCorrection::tensor:
-    return "tensor";
-  }
-  return "?";
+  return name_of(s).data();
 }
 
 const char* to_string(VolumeCorrection v) {
-  switch (v) {
-  case VolumeCorrection::none:
-    return "none";
-  case VolumeCorrection::linear:
-    return "linear";
-  case VolumeCorrection::exact:
-    return "exact";
-  case VolumeCorrection::moment:
-    return "moment";
-  }
-  return "?";
+  return name_of(v).data();
 }
 
 std::array<const char*, all_surface_corrections.size()> surface_correction_names() {

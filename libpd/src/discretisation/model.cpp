@@ -195,15 +195,28 @@ std::size_t Model::memory_bytes() const {
          ModelStorage::fixed;
 }
 
-Model build_model(const ModelSpec& spec) {
+namespace {
+
+void require_material_and_body(const ModelSpec& spec) {
   if (spec.materials.empty() || spec.bodies.empty()) {
     throw std::runtime_error("a model needs at least one material and one body");
   }
+}
+
+} // namespace
+
+Model build_model(const ModelSpec& spec) {
+  require_material_and_body(spec);
+  return build_model(spec, generate_lattice(spec.dimension, spec.lattice, spec.bodies));
+}
+
+Model build_model(const ModelSpec& spec, ParticleSet particles) {
+  require_material_and_body(spec);
   Model m;
   m.spec = spec;
   const int dim = spec.dimension.dim;
   const double delta = spec.lattice.horizon();
-  m.particles = generate_lattice(spec.dimension, spec.lattice, spec.bodies);
+  m.particles = std::move(particles);
   const std::size_t n = m.particles.size();
   if (n == 0) {
     throw std::runtime_error("the bodies contain no lattice particle");

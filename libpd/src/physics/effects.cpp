@@ -3,15 +3,7 @@
 namespace pd {
 
 std::string to_string(StretchKind kind) {
-  switch (kind) {
-  case StretchKind::exact:
-    return "exact";
-  case StretchKind::modified:
-    return "modified";
-  case StretchKind::fast:
-    return "fast";
-  }
-  return "?";
+  return std::string(name_of(kind));
 }
 
 std::vector<std::string> EffectSet::names() const {

@@ -13,41 +13,11 @@
 namespace pd {
 
 std::string to_string(IntegratorKind kind) {
-  switch (kind) {
-  case IntegratorKind::damped_euler:
-    return "damped-euler";
-  case IntegratorKind::euler_cromer:
-    return "euler-cromer";
-  case IntegratorKind::verlet:
-    return "verlet";
-  case IntegratorKind::adr:
-    return "adr";
-  case IntegratorKind::arkode:
-    return "arkode";
-  }
-  return "?";
+  return std::string(name_of(kind));
 }
 
 std::string to_string(ArkodeTable table) {
-  switch (table) {
-  case ArkodeTable::heun_euler:
-    return "heun-euler";
-  case ArkodeTable::bogacki_shampine:
-    return "bogacki-shampine";
-  case ArkodeTable::knoth_wolke:
-    return "knoth-wolke";
-  case ArkodeTable::rk4:
-    return "rk4";
-  case ArkodeTable::zonneveld:
-    return "zonneveld";
-  case ArkodeTable::cash_karp:
-    return "cash-karp";
-  case ArkodeTable::fehlberg:
-    return "fehlberg";
-  case ArkodeTable::dormand_prince:
-    return "dormand-prince";
-  }
-  return "?";
+  return std::string(name_of(table));
 }
 
 void Integrator::save(CheckpointWriter& w) const {

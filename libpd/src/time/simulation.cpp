@@ -11,19 +11,7 @@
 namespace pd {
 
 std::string to_string(RunStatus status) {
-  switch (status) {
-  case RunStatus::end_time:
-    return "end_time";
-  case RunStatus::converged:
-    return "converged";
-  case RunStatus::max_steps:
-    return "max_steps";
-  case RunStatus::unstable:
-    return "unstable";
-  case RunStatus::interrupted:
-    return "interrupted";
-  }
-  return "?";
+  return std::string(name_of(status));
 }
 
 Simulation::Simulation(Model& model, const SolverSpec& solver, const InitialSpec& initial)

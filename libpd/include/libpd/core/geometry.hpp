@@ -31,6 +31,7 @@ struct Box {
     }
     return true;
   }
+  bool operator==(const Box&) const = default;
 };
 
 /// A region is a union of boxes; a point belongs to it if it is in any box.
@@ -45,6 +46,7 @@ struct Region {
     }
     return false;
   }
+  bool operator==(const Region&) const = default;
 };
 
 } // namespace pd

@@ -8,6 +8,7 @@
 #pragma once
 
 #include "libpd/core/geometry.hpp"
+#include "libpd/core/names.hpp"
 
 #include <cstddef>
 #include <cstdint>
@@ -23,6 +24,14 @@ namespace pd {
 ///  * inclusive (default): bond iff |ξ| ≤ δ(1 + 1e-9)  (the family of Miranda eq. 14, |ξ| ≤ δ)
 ///  * strict:              bond iff |ξ| < δ(1 − 1e-9)
 enum class HorizonRule { inclusive, strict };
+
+template <>
+struct EnumName<HorizonRule> {
+  static constexpr NameTable<HorizonRule, 2> table{{
+      {"inclusive", HorizonRule::inclusive, "bonds of length exactly δ are kept"},
+      {"strict", HorizonRule::strict, "bonds of length exactly δ are dropped"},
+  }};
+};
 
 inline constexpr double horizon_guard_band = 1e-9;
 

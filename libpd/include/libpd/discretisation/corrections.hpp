@@ -10,6 +10,7 @@
 // weaker material's constants, model.cpp).
 #pragma once
 
+#include "libpd/core/names.hpp"
 #include "libpd/discretisation/bond_family.hpp"
 #include "libpd/discretisation/lattice.hpp"
 #include "libpd/physics/material.hpp"
@@ -25,6 +26,29 @@ enum class SurfaceCorrection { none, volume, energy, macek_silling, tensor };
 /// horizon (`linear`, `exact`), or lattice weights that reproduce the continuum's fourth moments
 /// (`moment`, see corrections.hpp).
 enum class VolumeCorrection { none, linear, exact, moment };
+
+template <>
+struct EnumName<SurfaceCorrection> {
+  static constexpr NameTable<SurfaceCorrection, 5> table{{
+      {"none", SurfaceCorrection::none, "no correction"},
+      {"volume", SurfaceCorrection::volume, "volume method"},
+      {"energy", SurfaceCorrection::energy, "energy method"},
+      {"macek-silling", SurfaceCorrection::macek_silling,
+       "classical over PD energy density under isotropic expansion"},
+      {"tensor", SurfaceCorrection::tensor, "tensor method"},
+  }};
+};
+
+template <>
+struct EnumName<VolumeCorrection> {
+  static constexpr NameTable<VolumeCorrection, 4> table{{
+      {"none", VolumeCorrection::none, "full neighbour volumes"},
+      {"linear", VolumeCorrection::linear, "partial volume of cut cells, linear in the distance"},
+      {"exact", VolumeCorrection::exact, "partial volume of cut cells, exact"},
+      {"moment", VolumeCorrection::moment, "moment-matched lattice weights"},
+  }};
+};
+
 
 /// What the corrections read of a model: its dimension, lattice, horizon rule and the two
 /// corrections (ModelSpec::corrections()).
@@ -110,12 +134,8 @@ std::vector<double> isotropic_surface_factors(const CorrectionSpec& spec,
 /// Names as written in scene files.
 const char* to_string(SurfaceCorrection s);
 const char* to_string(VolumeCorrection v);
-inline constexpr std::array<SurfaceCorrection, 5> all_surface_corrections{
-    SurfaceCorrection::none, SurfaceCorrection::volume, SurfaceCorrection::energy,
-    SurfaceCorrection::macek_silling, SurfaceCorrection::tensor};
-inline constexpr std::array<VolumeCorrection, 4> all_volume_corrections{
-    VolumeCorrection::none, VolumeCorrection::linear, VolumeCorrection::exact,
-    VolumeCorrection::moment};
+inline constexpr auto all_surface_corrections = enum_values<SurfaceCorrection>();
+inline constexpr auto all_volume_corrections = enum_values<VolumeCorrection>();
 
 /// All names in enum order (index = enum value), for tables over every combination.
 std::array<const char*, all_surface_corrections.size()> surface_correction_names();

@@ -12,6 +12,7 @@
 #pragma once
 
 #include "libpd/core/geometry.hpp"
+#include "libpd/core/names.hpp"
 #include "libpd/discretisation/bond_family.hpp"
 #include "libpd/physics/material.hpp"
 
@@ -25,6 +26,16 @@ namespace pd {
 
 enum class LatticeConvention { cell_centered, node_based };
 
+template <>
+struct EnumName<LatticeConvention> {
+  static constexpr NameTable<LatticeConvention, 2> table{{
+      {"cell-centered", LatticeConvention::cell_centered,
+       "particles at cell centres, surfaces λ/2 outside the outer particles"},
+      {"node-based", LatticeConvention::node_based,
+       "particles on the lattice nodes, including the box's corners"},
+  }};
+};
+
 struct LatticeSpec {
   double spacing = 0;                               ///< λ [m]
   double horizon_factor = 2.0 * 1.7320508075688772; ///< m = δ/λ; default 2√3 (Miranda §4)
@@ -37,6 +48,7 @@ struct LatticeSpec {
   std::uint64_t seed = 1;
 
   double horizon() const { return horizon_factor * spacing; }
+  bool operator==(const LatticeSpec&) const = default;
 };
 
 /// A body: a region of the lattice made of one material.
@@ -44,6 +56,8 @@ struct BodySpec {
   std::string name;
   Region region;
   int material = 0;
+
+  bool operator==(const BodySpec&) const = default;
 };
 
 /// Particles in the reference configuration, in a deterministic order (x fastest).

@@ -2,6 +2,7 @@
 // supports and loads. Built once from a ModelSpec (normally read from a scene file).
 #pragma once
 
+#include "libpd/core/names.hpp"
 #include "libpd/discretisation/bond_family.hpp"
 #include "libpd/discretisation/corrections.hpp"
 #include "libpd/discretisation/lattice.hpp"
@@ -55,6 +56,17 @@ struct BoxRegionLoad {
   enum class Kind { total, per_area, per_length, body } kind = Kind::total;
   Vec3 value{0, 0, 0};
   double measure = 1; ///< area [m²] or length [m] for per_area / per_length
+};
+
+template <>
+struct EnumName<BoxRegionLoad::Kind> {
+  using Kind = BoxRegionLoad::Kind;
+  static constexpr NameTable<Kind, 4> table{{
+      {"total", Kind::total, "total force [N] spread over the region"},
+      {"per_area", Kind::per_area, "traction [N/m²] on the loaded area"},
+      {"per_length", Kind::per_length, "line load [N/m] on the loaded length"},
+      {"body", Kind::body, "body force density [N/m³]"},
+  }};
 };
 
 struct SupportSpec {
@@ -159,6 +171,8 @@ std::vector<Constraint> support_constraints(const ModelSpec& spec, const Particl
 /// Build particles, families, bond parameters, supports and loads.
 /// Throws std::runtime_error for inconsistent specs that the scene checker did not catch.
 Model build_model(const ModelSpec& spec);
+/// The same on particles already generated from spec's dimension, lattice and bodies.
+Model build_model(const ModelSpec& spec, ParticleSet particles);
 
 /// Bond stiffness of directed bond k, c_ij·V_j·corrections, whichever storage the model uses.
 inline double bond_stiffness(const Model& m, std::size_t k) {

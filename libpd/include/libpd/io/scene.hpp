@@ -8,6 +8,7 @@
 #include "libpd/discretisation/model.hpp"
 #include "libpd/time/simulation.hpp"
 
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -46,6 +47,15 @@ struct OutputSpec {
   bool vtu = true;
 };
 
+/// Particles the reader generated (to check mirror supports), with the dimension, lattice and
+/// bodies they were generated from.
+struct GeneratedParticles {
+  ModelDimension dimension;
+  LatticeSpec lattice;
+  std::vector<BodySpec> bodies;
+  ParticleSet particles;
+};
+
 struct Scene {
   std::string path; ///< file it was read from
   std::string title;
@@ -55,6 +65,8 @@ struct Scene {
   std::vector<ProbeSpec> probes;
   OutputSpec output;
   std::vector<std::string> warnings; ///< "FILE:LINE:COL: warning: ..." lines
+  /// Set when reading had to generate the particles; build_model(Scene) reuses them.
+  std::shared_ptr<const GeneratedParticles> particles;
 };
 
 /// Read and check a scene. Throws SceneError for every problem it can detect without running,
@@ -62,6 +74,10 @@ struct Scene {
 Scene load_scene(const std::string& path);
 /// Same, from text (tests); `name` stands in for the file name in messages.
 Scene parse_scene(const std::string& text, const std::string& name);
+
+/// build_model(scene.model), on the particles the reader generated if it did and the model's
+/// dimension, lattice and bodies are still the ones they were generated from.
+Model build_model(const Scene& scene);
 
 /// A commented template listing every key with its default, unit and meaning.
 std::string scene_template();

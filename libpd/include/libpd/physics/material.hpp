@@ -7,6 +7,8 @@
 // c = 12E/(πδ⁴)).
 #pragma once
 
+#include "libpd/core/names.hpp"
+
 #include <optional>
 #include <string>
 
@@ -15,6 +17,14 @@ namespace pd {
 /// How a 2D model interprets its out-of-plane direction.
 enum class PlaneMode { plane_stress, plane_strain };
 
+template <>
+struct EnumName<PlaneMode> {
+  static constexpr NameTable<PlaneMode, 2> table{{
+      {"stress", PlaneMode::plane_stress, "plane stress: bond-based ν = 1/3"},
+      {"strain", PlaneMode::plane_strain, "plane strain: bond-based ν = 1/4"},
+  }};
+};
+
 /// The spatial setting of a model: dimension 1, 2 or 3, plus the 2D assumption and the
 /// thickness (2D) or cross-section area (1D) that turn a lattice cell into a volume.
 struct ModelDimension {
@@ -22,6 +32,8 @@ struct ModelDimension {
   PlaneMode plane = PlaneMode::plane_stress;
   double thickness = 1.0;     ///< 2D only [m]
   double cross_section = 1.0; ///< 1D only [m²]
+
+  bool operator==(const ModelDimension&) const = default;
 };
 
 struct Material {

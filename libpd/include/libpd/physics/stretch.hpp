@@ -15,6 +15,8 @@
 // deformations; the others are accurate where bonds break or yield at small stretch.
 #pragma once
 
+#include "libpd/core/names.hpp"
+
 #include <cmath>
 #include <concepts>
 #include <string_view>
@@ -80,5 +82,14 @@ static_assert(StretchMeasure<ModifiedStretch>);
 static_assert(StretchMeasure<FastStretch>);
 
 enum class StretchKind { exact, modified, fast };
+
+template <>
+struct EnumName<StretchKind> {
+  static constexpr NameTable<StretchKind, 3> table{{
+      {"exact", StretchKind::exact, "s = (r − L)/L (eq. 6)"},
+      {"modified", StretchKind::modified, "s̄ = (r² − L²)/(2L²) (eq. 17)"},
+      {"fast", StretchKind::fast, "s̄ of eq. 17 with direction Δy/L: no square root"},
+  }};
+};
 
 } // namespace pd

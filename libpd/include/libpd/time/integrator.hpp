@@ -17,6 +17,7 @@
 //                damping as a term of the right-hand side. Needs LIBPD_WITH_SUNDIALS.
 #pragma once
 
+#include "libpd/core/names.hpp"
 #include "libpd/discretisation/model.hpp"
 #include "libpd/kernel/force_kernel.hpp"
 
@@ -29,9 +30,20 @@ namespace pd {
 
 enum class IntegratorKind { damped_euler, euler_cromer, verlet, adr, arkode };
 
+template <>
+struct EnumName<IntegratorKind> {
+  static constexpr NameTable<IntegratorKind, 5> table{{
+      {"damped-euler", IntegratorKind::damped_euler, "explicit Euler with kinematic damping"},
+      {"euler-cromer", IntegratorKind::euler_cromer, "symplectic Euler, no damping"},
+      {"verlet", IntegratorKind::verlet, "velocity Verlet, no damping"},
+      {"adr", IntegratorKind::adr, "adaptive dynamic relaxation (Kilic & Madenci 2010)"},
+      {"arkode", IntegratorKind::arkode, "SUNDIALS ARKode ERKStep with a Butcher table"},
+  }};
+};
+
 std::string to_string(IntegratorKind kind);
 
-/// Butcher tables offered for `arkode`, in the order of the scene's `solver.arkode.table` words.
+/// Butcher tables offered for `arkode` (their scene words: EnumName<ArkodeTable> below).
 /// Only tables that compute correctly with SUNDIALS 6.4.1 are offered: the native tables whose
 /// last node c_s ≠ 1 or that are truly FSAL (last row of A = bᵀ), and two tables hit by upstream
 /// issue #311 (c_s = 1, not FSAL) that run with the reset work-around (see ArkodeSpec).
@@ -45,7 +57,21 @@ enum class ArkodeTable {
   fehlberg,         ///< ARKODE_FEHLBERG_6_4_5, order 5(4), c_s = 1/2
   dormand_prince,   ///< ARKODE_DORMAND_PRINCE_7_4_5, order 5(4), FSAL
 };
-inline constexpr int arkode_table_count = 8;
+
+template <>
+struct EnumName<ArkodeTable> {
+  static constexpr NameTable<ArkodeTable, 8> table{{
+      {"heun-euler", ArkodeTable::heun_euler, "order 2(1)"},
+      {"bogacki-shampine", ArkodeTable::bogacki_shampine, "order 3(2)"},
+      {"knoth-wolke", ArkodeTable::knoth_wolke, "order 3, no embedding"},
+      {"rk4", ArkodeTable::rk4, "classic RK4, no embedding"},
+      {"zonneveld", ArkodeTable::zonneveld, "order 4(3)"},
+      {"cash-karp", ArkodeTable::cash_karp, "order 5(4)"},
+      {"fehlberg", ArkodeTable::fehlberg, "order 5(4)"},
+      {"dormand-prince", ArkodeTable::dormand_prince, "order 5(4)"},
+  }};
+};
+inline constexpr int arkode_table_count = static_cast<int>(EnumName<ArkodeTable>::table.size());
 std::string to_string(ArkodeTable table);
 
 /// An explicit Butcher table (c, A, b and the embedding d), as handed to SUNDIALS.

@@ -2,6 +2,7 @@
 // instability. Quasi-static runs end when they have converged, not after a fixed step count.
 #pragma once
 
+#include "libpd/core/names.hpp"
 #include "libpd/time/integrator.hpp"
 #include "libpd/discretisation/model.hpp"
 
@@ -48,6 +49,17 @@ struct InitialSpec {
 };
 
 enum class RunStatus { end_time, converged, max_steps, unstable, interrupted };
+
+template <>
+struct EnumName<RunStatus> {
+  static constexpr NameTable<RunStatus, 5> table{{
+      {"end_time", RunStatus::end_time, "reached solver.end_time"},
+      {"converged", RunStatus::converged, "met the steady-state criterion"},
+      {"max_steps", RunStatus::max_steps, "stopped at solver.max_steps"},
+      {"unstable", RunStatus::unstable, "a displacement exceeded solver.blowup_displacement"},
+      {"interrupted", RunStatus::interrupted, "stopped by SIGINT"},
+  }};
+};
 std::string to_string(RunStatus status);
 
 struct RunResult {

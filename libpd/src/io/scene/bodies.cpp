@@ -1,0 +1,63 @@
+// The `bodies` list: regions of the lattice, each made of one material.
+#include "sections.hpp"
+
+#include <algorithm>
+
+namespace pd::scene {
+
+namespace {
+
+constexpr Key body_keys[] = {
+    name_key("unique name of the body", "bar"),
+    {.name = "material",
+     .type = Type::string,
+     .doc = "name of one of the materials",
+     .example = "steel",
+     .need = Need::required},
+    box_key("region [[lo], [hi]] filled with lattice particles", "[[0, 0, 0], [1, 0.1, 0.1]]"),
+    boxes_key("instead of box: a union of boxes",
+              "[[[0, 0, 0], [0.5, 0.1, 0.1]], [[0.5, 0, 0], [1, 0.1, 0.1]]]"),
+};
+
+} // namespace
+
+constinit const Section body_section{"in a body", body_keys};
+
+void read_bodies(Reader& r, ModelSpec& model, Marks& marks) {
+  std::vector<std::string_view> material_names;
+  for (const Material& m : model.materials) {
+    material_names.push_back(m.name);
+  }
+  const auto list = r.items(marks.top, "bodies");
+  if (list.empty()) {
+    r.fail(marks.top.find("bodies")->at(), "'bodies' is empty: a scene needs at least one body",
+           "add a body: '- name: bar', 'material: <name>', 'box: [[lo], [hi]]'");
+  }
+  if (list.size() > std::numeric_limits<std::uint16_t>::max()) {
+    r.fail(marks.top.find("bodies")->value, "too many bodies (at most 65535)",
+           "merge bodies of the same material into one body with 'boxes'");
+  }
+  std::map<std::string, YAML::Node> names;
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    const Fields f = r.item(list[i], body_section, "body", "bodies", i);
+    BodySpec body;
+    body.name = *r.string(f, "name");
+    check_unique(r, names, body.name, f.find("name")->at(), "body");
+    const Entry* m = f.find("material");
+    const std::string material = *r.string(f, "material");
+    const auto found = std::find(material_names.begin(), material_names.end(), material);
+    if (found == material_names.end()) {
+      r.fail(m->at(), fmt::format("body '{}' names unknown material '{}'", body.name, material),
+             suggestion(material, material_names, "materials defined"));
+    }
+    body.material = static_cast<int>(found - material_names.begin());
+    const Reader::RegionRead region = r.region(f);
+    body.region = region.region;
+    marks.must_have_particles.push_back(
+        {body.region, region.node, fmt::format("body '{}' contains no lattice point", body.name)});
+    marks.body_box_nodes.push_back(region.box_nodes);
+    model.bodies.push_back(std::move(body));
+  }
+}
+
+} // namespace pd::scene

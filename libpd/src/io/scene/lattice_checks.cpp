@@ -1,0 +1,235 @@
+// Checks of a scene against its lattice: first from the estimate of its size alone (memory,
+// 32-bit indices, coordinates far from 0), then by counting lattice points in regions, and last,
+// for mirror supports only, by generating the particles.
+#include "libpd/io/resources.hpp"
+#include "sections.hpp"
+
+#include <algorithm>
+
+namespace pd::scene {
+
+namespace {
+
+/// Intersection of `region` with every body box. Lattice membership uses a tolerance of 1e-6 λ,
+/// so boxes that miss each other by less than that may still share a lattice point: such slivers
+/// are kept as degenerate boxes and the lattice count decides.
+Region intersect_with_bodies(const Region& region, const std::vector<BodySpec>& bodies, int dim,
+                             double spacing) {
+  Region out;
+  for (const Box& a : region.boxes) {
+    for (const BodySpec& body : bodies) {
+      for (const Box& b : body.region.boxes) {
+        Box c = a;
+        bool empty = false;
+        for (int k = 0; k < dim; ++k) {
+          c.lo[k] = std::max(a.lo[k], b.lo[k]);
+          c.hi[k] = std::min(a.hi[k], b.hi[k]);
+          if (c.lo[k] > c.hi[k]) {
+            if (c.lo[k] - c.hi[k] > 2e-6 * spacing) {
+              empty = true;
+            }
+            c.lo[k] = c.hi[k] = 0.5 * (c.lo[k] + c.hi[k]);
+          }
+        }
+        if (!empty) {
+          out.boxes.push_back(c);
+        }
+      }
+    }
+  }
+  return out;
+}
+
+double distance_to_box(const Vec3& p, const Box& b, int dim) {
+  double sum = 0;
+  for (int k = 0; k < dim; ++k) {
+    const double d = std::max({b.lo[k] - p[k], 0.0, p[k] - b.hi[k]});
+    sum += d * d;
+  }
+  return std::sqrt(sum);
+}
+
+/// Whether a union of boxes holds a lattice point: some box does. Counted per axis in floating
+/// point, so it needs no enumeration and cannot overflow, whatever the box.
+bool holds_lattice_point(const ModelDimension& d, const LatticeSpec& lattice, const Region& r) {
+  return std::any_of(r.boxes.begin(), r.boxes.end(),
+                     [&](const Box& b) { return lattice_points_in_box(d, lattice, b) > 0; });
+}
+
+std::string format_count(double n) {
+  return n < 1e6 ? fmt::format("{:.0f}", n) : fmt::format("{:.2g}", n);
+}
+
+/// Refuse a scene whose model cannot fit in the memory available (or whose particles cannot be
+/// indexed with 32 bits), from the estimate alone: nothing is enumerated or allocated, so a
+/// request for 10^12 particles fails in microseconds instead of being killed by the OOM killer.
+void check_resources(const Reader& r, const Scene& scene, const YAML::Node& spacing) {
+  const ResourceEstimate e = estimate_resources(scene.model, scene.solver);
+  const int dim = scene.model.dimension.dim;
+  const std::string shrink =
+      fmt::format("coarsen 'lattice.spacing' (memory grows as λ^-{}), shrink the bodies or lower "
+                  "'horizon_factor' (bonds grow as m^{}); 'pd info' shows the estimate",
+                  dim, dim);
+  constexpr double max_particles = std::numeric_limits<std::uint32_t>::max();
+  if (!(e.particles <= max_particles)) {
+    r.fail(spacing,
+           fmt::format("this scene has about {} particles; libpd indexes particles with 32 bits "
+                       "(at most {:.3g})",
+                       std::isfinite(e.particles) ? format_count(e.particles) : "infinitely many",
+                       max_particles),
+           shrink);
+  }
+  std::optional<MemoryBudget> budget;
+  try {
+    budget = available_memory();
+  } catch (const std::invalid_argument& ex) {
+    throw SceneError(r.file(), {}, ex.what(),
+                     "unset PD_MEMORY_LIMIT or give it in bytes, e.g. PD_MEMORY_LIMIT=2G");
+  }
+  if (budget && !(e.bytes <= budget->bytes)) {
+    const bool grid = e.grid_bytes > 0.5 * e.bytes;
+    r.fail(spacing,
+           fmt::format("this scene needs about {} ({} particles, {} bonds{}); {} {}",
+                       format_bytes(e.bytes), format_count(e.particles), format_count(e.bonds),
+                       grid ? ", most of it for the neighbour-search grid over the bounding box "
+                              "of the bodies"
+                            : "",
+                       format_bytes(budget->bytes),
+                       budget->source == "PD_MEMORY_LIMIT" ? "are allowed by PD_MEMORY_LIMIT"
+                                                           : "are available"),
+           grid ? "move the bodies closer together (the grid spans their bounding box with cells "
+                  "of one horizon), or " +
+                      shrink
+                : shrink);
+  }
+}
+
+/// Lattice positions are origin + kλ in double precision: far from 0 (in spacings) they lose the
+/// digits that bond lengths need, and lattice indices beyond 2^63 cannot even be formed. 10^9
+/// spacings keep positions exact to 10^-7 λ.
+constexpr double max_spacings_from_zero = 1e9;
+
+void check_coordinate(const Reader& r, const YAML::Node& node, const std::string& what, double x,
+                      double spacing) {
+  if (!(std::abs(x) / spacing <= max_spacings_from_zero)) {
+    r.fail(node,
+           fmt::format("{} has a coordinate {} m, more than 10^9 spacings ({} m each) from 0: "
+                       "lattice positions that far out lose the precision bond lengths need",
+                       what, format_number(x), format_number(spacing)),
+           "move the scene's coordinates closer to 0, or coarsen the spacing");
+  }
+}
+
+void check_coordinates(const Reader& r, const ModelSpec& model, const Marks& marks) {
+  const LatticeSpec& lattice = model.lattice;
+  const Fields& lat = marks.lattice;
+  const int dim = model.dimension.dim;
+  const auto& body_box_nodes = marks.body_box_nodes;
+  for (int a = 0; a < dim; ++a) {
+    if (lat.has("origin")) {
+      check_coordinate(r, lat.find("origin")->at(), "'lattice.origin'", lattice.origin[a],
+                       lattice.spacing);
+    }
+  }
+  for (std::size_t i = 0; i < model.bodies.size(); ++i) {
+    const auto& boxes = model.bodies[i].region.boxes;
+    for (std::size_t k = 0; k < boxes.size(); ++k) {
+      for (int a = 0; a < dim; ++a) {
+        for (double x : {boxes[k].lo[a], boxes[k].hi[a]}) {
+          check_coordinate(r, body_box_nodes[i][k],
+                           fmt::format("a box of body '{}'", model.bodies[i].name), x,
+                           lattice.spacing);
+        }
+      }
+    }
+  }
+}
+
+void check_regions(const Reader& r, const ModelSpec& model, const Marks& marks) {
+  const LatticeSpec& lattice = model.lattice;
+  const ModelDimension& d = model.dimension;
+  const int dim = d.dim;
+  for (const RegionUse& use : marks.must_have_particles) {
+    if (!holds_lattice_point(d, lattice, use.region)) {
+      r.fail(use.node, use.what + fmt::format(" (spacing {} m)", format_number(lattice.spacing)),
+             "enlarge the box to at least one spacing in every direction, or refine the spacing");
+    }
+  }
+  for (std::size_t i = 0; i < model.bodies.size(); ++i) {
+    for (std::size_t j = 0; j < i; ++j) {
+      const BodySpec& a = model.bodies[j];
+      const BodySpec& b = model.bodies[i];
+      if (a.material == b.material) {
+        continue;
+      }
+      for (std::size_t k = 0; k < b.region.boxes.size(); ++k) {
+        const Region common =
+            intersect_with_bodies(Region{{b.region.boxes[k]}}, {a}, dim, lattice.spacing);
+        if (holds_lattice_point(d, lattice, common)) {
+          r.fail(marks.body_box_nodes[i][k],
+                 fmt::format("bodies '{}' and '{}' overlap but have different materials ('{}' and "
+                             "'{}')",
+                             a.name, b.name, model.materials[a.material].name,
+                             model.materials[b.material].name),
+                 fmt::format("shared particles would silently belong to '{}' (listed first); "
+                             "separate the boxes or use one material",
+                             a.name));
+        }
+      }
+    }
+  }
+  for (const RegionUse& use : marks.must_touch_bodies) {
+    const Region common = intersect_with_bodies(use.region, model.bodies, dim, lattice.spacing);
+    if (!holds_lattice_point(d, lattice, common)) {
+      r.fail(use.node, use.what,
+             "move or enlarge the box so that it contains particles of a body (particles sit at "
+             "lattice points inside the body boxes)");
+    }
+  }
+  for (std::size_t i = 0; i < marks.probe_points.size(); ++i) {
+    const auto& [p, node] = marks.probe_points[i];
+    double nearest = inf;
+    for (const BodySpec& b : model.bodies) {
+      for (const Box& box : b.region.boxes) {
+        nearest = std::min(nearest, distance_to_box(p, box, dim));
+      }
+    }
+    if (nearest > lattice.spacing * (1 + 1e-9)) {
+      r.fail(node,
+             fmt::format("probe '{}' is {} m from the nearest body, farther than one spacing ({} "
+                         "m)",
+                         marks.probe_point_names[i], fmt::format("{:.3g}", nearest),
+                         format_number(lattice.spacing)),
+             "put the point inside a body or on its surface");
+    }
+  }
+}
+
+} // namespace
+
+std::optional<ParticleSet> check_against_lattice(const Reader& r, const Scene& scene,
+                                                 const Marks& marks) {
+  const ModelSpec& model = scene.model;
+  // Resources first: before anything is enumerated or allocated.
+  check_resources(r, scene, marks.lattice.find("spacing")->at());
+  check_coordinates(r, model, marks);
+  check_regions(r, model, marks);
+  // Mirror supports need each image to be a free particle: only the lattice can tell (the memory
+  // guard has passed, so generating the particles is affordable). Model building reuses them.
+  if (std::none_of(model.supports.begin(), model.supports.end(),
+                   [](const SupportSpec& s) { return s.mirrors(); })) {
+    return std::nullopt;
+  }
+  ParticleSet particles = generate_lattice(model.dimension, model.lattice, model.bodies);
+  try {
+    support_constraints(model, particles);
+  } catch (const SupportError& e) {
+    r.fail(marks.support_nodes.at(e.support), e.what(),
+           "a mirror support needs a regular lattice (no position_jitter), a plane on a cell "
+           "face, and free body particles beyond the plane at least as far as the support "
+           "reaches");
+  }
+  return particles;
+}
+
+} // namespace pd::scene

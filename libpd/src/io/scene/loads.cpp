@@ -1,0 +1,73 @@
+// The `loads` list: forces on the particles in a region, as a total, a traction or a density.
+#include "bind.hpp"
+#include "sections.hpp"
+
+namespace pd::scene {
+
+namespace {
+
+constexpr Key load_keys[] = {
+    name_key("unique name of the load", "pull"),
+    box_key("region whose particles (of any body) carry the load", "[[0.99, 0, 0], [1, 0.1, 0.1]]"),
+    boxes_key("instead of box: a union of boxes", "[[[0.99, 0, 0], [1, 0.1, 0.1]]]"),
+    {.name = "type",
+     .type = Type::choice,
+     .doc = "total force [N] spread over the region, or a traction per_area [N/m²], per_length "
+            "[N/m], or a body force density [N/m³]",
+     .choices = enum_words<BoxRegionLoad::Kind>,
+     .bind = field_with_default<&LoadSpec::load, &BoxRegionLoad::kind>()},
+    {.name = "value",
+     .type = Type::vector,
+     .doc = "force vector, in the unit its type implies",
+     .example = "[1000, 0, 0]",
+     .need = Need::required,
+     .bind = field<&LoadSpec::load, &BoxRegionLoad::value>()},
+    {.name = "measure",
+     .type = Type::number,
+     .doc = "loaded area [m²] (per_area) or length [m] (per_length); only for these types",
+     .unit = "m² or m",
+     .range = positive,
+     .example = "0.01",
+     .show = Show::commented},
+};
+
+} // namespace
+
+constinit const Section load_section{"in a load", load_keys};
+
+void read_loads(Reader& r, ModelSpec& model, Marks& marks) {
+  std::map<std::string, YAML::Node> names;
+  const auto list = r.items(marks.top, "loads");
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    const Fields f = r.item(list[i], load_section, "load", "loads", i);
+    LoadSpec l;
+    l.name = *r.string(f, "name");
+    check_unique(r, names, l.name, f.find("name")->at(), "load");
+    const Reader::RegionRead region = r.region(f);
+    l.load.region = region.region;
+    r.read_bound(f, l);
+    r.check_in_space(f.find("value")->at(), f.label("value"), l.load.value);
+    const bool needs_measure = l.load.kind == BoxRegionLoad::Kind::per_area ||
+                               l.load.kind == BoxRegionLoad::Kind::per_length;
+    if (auto measure = r.number(f, "measure")) {
+      if (!needs_measure) {
+        r.fail(f.find("measure")->name,
+               fmt::format("'measure' of load '{}' applies only to per_area and per_length loads",
+                           l.name),
+               "remove it: total and body loads need no area or length");
+      }
+      l.load.measure = *measure;
+    } else if (needs_measure) {
+      r.fail(f.anchor,
+             fmt::format("load '{}' of type {} needs 'measure', the loaded {}", l.name,
+                         name_of(l.load.kind),
+                         l.load.kind == BoxRegionLoad::Kind::per_area ? "area [m²]" : "length [m]"),
+             "add e.g. 'measure: 0.01'");
+    }
+    marks.must_touch_bodies.push_back(
+        {l.load.region, region.node, fmt::format("load '{}' acts on no particle", l.name)});
+    model.loads.push_back(std::move(l));
+  }
+}
+
+} // namespace pd::scene
