@@ -26,7 +26,7 @@
 //
 // SUNDIALS issue #311 (fixed in 6.7.0). At the end of a step ERKStep 6.4.1 copies the last
 // stage's right-hand side into the first stage of the next step whenever c_s = 1, even if the last
-// row of A differs from bᵀ (not FSAL). Measured on y'' = −y (tests/unit/integrator_order_test.cpp):
+// row of A differs from bᵀ (not FSAL). Measured on y'' = −y (tests/unit/time/integrator_order_test.cpp):
 // classic RK4 falls to order 3, ARK324L2SA-ERK and Sayfy–Aburub to order 2, and Heun–Euler keeps
 // order 2 but has a 2.5× larger error and grows far faster. For the offered tables with c_s = 1
 // that are not FSAL (heun-euler, rk4) the integrator calls ERKStepReset before every step, which

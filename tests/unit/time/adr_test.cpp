@@ -1,6 +1,6 @@
-// Adaptive dynamic relaxation (Kilic & Madenci 2010, src/adr.cpp): the fictitious density makes
+// Adaptive dynamic relaxation (Kilic & Madenci 2010, libpd/src/time/adr.cpp): the fictitious density makes
 // central differences with Δt = 1 stable (ω_max of Λ⁻¹K ≤ 2, checked with the Lanczos estimate of
-// libpd/stability.hpp), and ADR reaches the same static answer as damped Euler under the same
+// libpd/time/stability.hpp), and ADR reaches the same static answer as damped Euler under the same
 // steady-state criterion. AdrSlow.* runs the clamped-beam acceptance case (≈ 20 s, label it slow).
 #include "libpd/kernel/force_kernel.hpp"
 #include "libpd/time/integrator.hpp"

@@ -1,4 +1,4 @@
-// The sharp prediction of what `pd stability` measures (libpd/stability.hpp): a bounded run of N
+// The sharp prediction of what `pd stability` measures (libpd/time/stability.hpp): a bounded run of N
 // steps is unstable once its energy grows by more than `growth`, and each mode's energy grows by
 // |a(ωΔt)|^{2N}. Checked here against closed forms derived independently of the library code.
 #include "libpd/time/integrator.hpp"
