@@ -66,7 +66,7 @@ void store_value(const Reader& r, const Fields& f, std::string_view key, T& fiel
     }
   } else {
     static_assert(NamedEnum<T>, "no scene reader for this field type");
-    // The key's choices are the table's words (schema test), so the index is the table row.
+    // The key declares `.choices = enum_words<T>`, so the index of its word is the table row.
     if (auto i = r.choice(f, key)) {
       field = EnumName<T>::table[static_cast<std::size_t>(*i)].value;
     }
