@@ -46,7 +46,7 @@ int info(const InfoArgs& a) {
   const Scene scene = load_or_explain(a.scene);
   const ResourceEstimate est = estimate_resources(scene.model, scene.solver);
   const auto budget = available_memory();
-  const Model model = build_model(scene.model);
+  const Model model = build_model(scene);
   const double dt = stable_time_step(model);
   const double per_particle = 2.0 * static_cast<double>(model.family.bond_count()) /
                               static_cast<double>(std::max<std::size_t>(model.size(), 1));

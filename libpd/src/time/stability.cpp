@@ -182,9 +182,8 @@ std::string StabilityTarget::label() const {
 
 ModelSpec stability_model(const ModelSpec& spec) {
   ModelSpec s = spec;
-  s.loads.clear();
+  s.loads.clear(); // build_model derives body_force from the loads, so it goes with them
   s.effects.damping = false;
-  s.effects.body_force = false;
   return s;
 }
 
