@@ -27,6 +27,9 @@ import sys
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT / "reports"))
+from pdreport.stages import parse_json_output  # noqa: E402
+
 SCENES = ROOT / "verification" / "scenes"
 CASES = ["bond-count", "bar-vibration", "bar-energy", "block-tension", "clamped-beam-fast",
          "cantilever-fast", "plate-3clamped-fast"]
@@ -64,17 +67,8 @@ def run(cmd: list[str], cwd: Path | None = None) -> subprocess.CompletedProcess:
 
 
 def json_lines(text: str):
-    """Output of a `--json` command: one document, or one document per line."""
-    try:
-        return json.loads(text)
-    except json.JSONDecodeError:
-        pass
-    rows = []
-    for line in text.splitlines():
-        line = line.strip()
-        if line.startswith("{") or line.startswith("["):
-            rows.append(json.loads(line))
-    return rows
+    """Output of a `--json` command (the report's reader); [] when the command printed nothing."""
+    return parse_json_output(text) if text.strip() else []
 
 
 def checkpoint_scenes(variant: str, work: Path) -> tuple[Path, Path, int]:
