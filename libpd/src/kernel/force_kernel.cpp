@@ -1,6 +1,15 @@
 #include "libpd/kernel/force_kernel.hpp"
 
+#include "libpd/kernel/simd_bond_loop.hpp"
+
+#include <algorithm>
+#include <cstdint>
 #include <fmt/format.h>
+#include <limits>
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
 
 namespace pd {
 
@@ -29,10 +38,40 @@ namespace {
 template <StretchMeasure Stretch, BondLaw Law, bool Damage, class Field>
 class KernelEvaluator final : public ForceEvaluator {
 public:
-  explicit KernelEvaluator(Model& model) : model_(model) {}
+  /// `simd` null: the scalar template; otherwise that row kernel of the SIMD path.
+  KernelEvaluator(Model& model, kernel::RowKernel simd)
+      : model_(model), simd_(simd),
+        path_(simd == nullptr ? "scalar" : "simd/" + kernel::simd_target_name()) {}
 
   void compute(const double* y, double* b) override {
-    accumulate_bond_forces<Stretch, Law, Damage, Field>(kernel_data(model_), y, b);
+    if (simd_ == nullptr) {
+      accumulate_bond_forces<Stretch, Law, Damage, Field>(kernel_data(model_), y, b);
+      return;
+    }
+    const KernelData d = kernel_data(model_);
+    const std::size_t n = d.particles;
+    const std::size_t bonds = d.offsets[n];
+#pragma omp parallel if (bonds >= kernel::simd_parallel_min_bonds)
+    {
+      std::size_t first = 0, last = n;
+#ifdef _OPENMP
+      // Contiguous particle ranges with equal bond counts (irregular sets balance too); each
+      // particle's result does not depend on which thread computes it.
+      const auto t = static_cast<std::size_t>(omp_get_thread_num());
+      const auto threads = static_cast<std::size_t>(omp_get_num_threads());
+      const auto split = [&](std::size_t part) {
+        if (part >= threads) {
+          return n;
+        }
+        const std::size_t target = bonds / threads * part + bonds % threads * part / threads;
+        return static_cast<std::size_t>(std::lower_bound(d.offsets, d.offsets + n, target) -
+                                        d.offsets);
+      };
+      first = split(t);
+      last = split(t + 1);
+#endif
+      simd_(d, y, b, first, last);
+    }
   }
 
   double strain_energy(const double* y) const override {
@@ -72,35 +111,38 @@ public:
   }
 
   std::string description() const override {
-    return fmt::format("stretch={} law={} damage={} field={}", Stretch::name, Law::name,
-                       Damage ? "on" : "off", Field::per_bond ? "per-bond" : "uniform");
+    return fmt::format("stretch={} law={} damage={} field={} path={}", Stretch::name, Law::name,
+                       Damage ? "on" : "off", Field::per_bond ? "per-bond" : "uniform", path_);
   }
 
 private:
   Model& model_;
+  kernel::RowKernel simd_;
+  std::string path_; ///< "scalar" or "simd/<instruction set picked when the kernel was chosen>"
 };
 
 template <StretchMeasure S, BondLaw L, bool D>
-std::unique_ptr<ForceEvaluator> pick_field(Model& m) {
+std::unique_ptr<ForceEvaluator> pick_field(Model& m, kernel::RowKernel simd) {
   if (m.effects.per_bond_field) {
-    return std::make_unique<KernelEvaluator<S, L, D, PerBondField>>(m);
+    return std::make_unique<KernelEvaluator<S, L, D, PerBondField>>(m, simd);
   }
-  return std::make_unique<KernelEvaluator<S, L, D, UniformField>>(m);
+  return std::make_unique<KernelEvaluator<S, L, D, UniformField>>(m, simd);
 }
 
 template <StretchMeasure S, BondLaw L>
-std::unique_ptr<ForceEvaluator> pick_damage(Model& m) {
-  return m.effects.damage ? pick_field<S, L, true>(m) : pick_field<S, L, false>(m);
+std::unique_ptr<ForceEvaluator> pick_damage(Model& m, kernel::RowKernel simd) {
+  return m.effects.damage ? pick_field<S, L, true>(m, simd) : pick_field<S, L, false>(m, simd);
 }
 
 template <StretchMeasure S>
-std::unique_ptr<ForceEvaluator> pick_law(Model& m) {
-  return m.effects.plasticity ? pick_damage<S, MicroPlastic>(m) : pick_damage<S, MicroElastic>(m);
+std::unique_ptr<ForceEvaluator> pick_law(Model& m, kernel::RowKernel simd) {
+  return m.effects.plasticity ? pick_damage<S, MicroPlastic>(m, simd)
+                              : pick_damage<S, MicroElastic>(m, simd);
 }
 
 } // namespace
 
-std::unique_ptr<ForceEvaluator> make_force_evaluator(Model& m) {
+std::unique_ptr<ForceEvaluator> make_force_evaluator(Model& m, KernelPath path) {
   if (m.effects.damage && m.state.broken.size() != m.family.directed_bond_count()) {
     throw std::logic_error("damage effect without bond state: build the model with build_model");
   }
@@ -111,13 +153,20 @@ std::unique_ptr<ForceEvaluator> make_force_evaluator(Model& m) {
   if (m.effects.per_bond_field && !m.field.per_bond()) {
     throw std::logic_error("per-bond field requested but not allocated");
   }
+  // The SIMD kernel gathers with 32-bit signed indices.
+  const bool simd = path == KernelPath::simd &&
+                    m.size() <= static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max());
+  const kernel::RowKernel rows =
+      simd ? kernel::simd_row_kernel(m.effects.stretch, m.effects.plasticity, m.effects.damage,
+                                     m.effects.per_bond_field)
+           : nullptr;
   switch (m.effects.stretch) {
   case StretchKind::exact:
-    return pick_law<ExactStretch>(m);
+    return pick_law<ExactStretch>(m, rows);
   case StretchKind::modified:
-    return pick_law<ModifiedStretch>(m);
+    return pick_law<ModifiedStretch>(m, rows);
   case StretchKind::fast:
-    return pick_law<FastStretch>(m);
+    return pick_law<FastStretch>(m, rows);
   }
   throw std::logic_error("unknown stretch measure");
 }

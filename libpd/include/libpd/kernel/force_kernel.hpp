@@ -11,8 +11,10 @@
 // the thread count, so forces (and whole runs) are bitwise identical for any number of threads.
 #pragma once
 
-#include "libpd/physics/bond_laws.hpp"
+#include "libpd/core/names.hpp"
 #include "libpd/discretisation/model.hpp"
+#include "libpd/kernel/kernel_data.hpp"
+#include "libpd/physics/bond_laws.hpp"
 #include "libpd/physics/stretch.hpp"
 
 #include <memory>
@@ -24,31 +26,7 @@ namespace pd {
 /// an oversubscribed barrier per step can cost 10× the work), so small models run serially.
 inline constexpr std::size_t parallel_min_particles = 4096;
 
-/// Bond parameters read either from one uniform value or from per-bond arrays.
-struct UniformField {
-  static constexpr bool per_bond = false;
-};
-struct PerBondField {
-  static constexpr bool per_bond = true;
-};
-
-/// Raw views of the arrays the loop touches.
-struct KernelData {
-  std::size_t particles = 0;
-  const std::size_t* offsets = nullptr;
-  const std::uint32_t* neighbour = nullptr;
-  const double* inverse_length = nullptr;
-  double stiffness = 0;
-  double critical_stretch = no_limit;
-  double yield_stretch = no_limit;
-  const double* bond_stiffness = nullptr;
-  const double* bond_critical_stretch = nullptr;
-  const double* bond_yield_stretch = nullptr;
-  std::uint8_t* broken = nullptr;
-  double* plastic_stretch = nullptr;
-  double* damage = nullptr;
-};
-
+/// Views of `model`'s arrays (KernelData lives in kernel_data.hpp, shared with the SIMD loop).
 KernelData kernel_data(Model& model);
 
 /// The bond loop for one effect combination. `y` holds current positions (3 per particle),
@@ -122,7 +100,20 @@ public:
   virtual std::string description() const = 0;
 };
 
+/// Which implementation of the bond loop runs. `simd` (kernel/simd_bond_loop.hpp) is the default;
+/// `scalar` is the template above, kept as the reference the SIMD kernel is tested against.
+enum class KernelPath { simd, scalar };
+
+template <>
+struct EnumName<KernelPath> {
+  static constexpr NameTable<KernelPath, 2> table{{
+      {"simd", KernelPath::simd, "the vectorised bond loop (kernel/simd_bond_loop.hpp)"},
+      {"scalar", KernelPath::scalar, "the scalar template, the reference of the SIMD loop"},
+  }};
+};
+
 /// Pick the kernel for `model.effects`. The model must outlive the evaluator.
-std::unique_ptr<ForceEvaluator> make_force_evaluator(Model& model);
+std::unique_ptr<ForceEvaluator> make_force_evaluator(Model& model,
+                                                     KernelPath path = KernelPath::simd);
 
 } // namespace pd

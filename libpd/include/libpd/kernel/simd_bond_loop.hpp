@@ -1,0 +1,45 @@
+// The vectorised bond loop: the same physics as `accumulate_bond_forces` (Miranda eq. 27 with the
+// stretch measures of eqs. 5–6 and 17, the laws of eqs. 7 and 14–16, damage eqs. 9–13), written
+// once over Google Highway and compiled for every x86 instruction set Highway knows (SSE4, AVX2,
+// AVX-512, …). The best one the running CPU supports is picked at run time (HWY_DYNAMIC_DISPATCH),
+// so the shipped binary stays baseline x86-64.
+//
+// Lanes run over the bonds of one particle's CSR row: neighbour positions are gathered, a masked
+// tail covers the end of the row. Each particle's force is summed in 8 "virtual lanes" (bond k of a
+// row goes to lane (k − row start) mod 8, whatever the hardware vector width), and the 8 lanes are
+// added in lane order 0…7. Each bond's force is rounded exactly as in the scalar kernel (no FMA
+// contraction in this file), so the result depends on neither the thread count nor the instruction
+// set; it differs from the scalar kernel only by the order of the per-particle sum.
+#pragma once
+
+#include "libpd/kernel/kernel_data.hpp"
+#include "libpd/physics/stretch.hpp"
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+
+namespace pd::kernel {
+
+/// Bonds summed per virtual lane group (see above). A power of two ≥ every vector width used.
+inline constexpr std::size_t virtual_lanes = 8;
+
+/// Computes b (and damage/plastic history) for particles [first, last): one effect combination,
+/// one instruction set. Reads and writes only rows of those particles, so threads may call it on
+/// disjoint ranges.
+using RowKernel = void (*)(const KernelData& d, const double* y, double* b, std::size_t first,
+                           std::size_t last);
+
+/// The row kernel for one effect combination, for the best instruction set of this CPU.
+RowKernel simd_row_kernel(StretchKind stretch, bool plasticity, bool damage, bool per_bond_field);
+
+/// Name of the instruction set the dispatcher picks on this CPU, e.g. "AVX3" (= AVX-512), "AVX2".
+std::string simd_target_name();
+
+/// Below this many directed bonds the SIMD kernel runs on one thread. NOT YET MEASURED: this is the
+/// scalar kernel's 4,096-particle threshold at ~100 bonds per particle, expressed in bonds (the
+/// work). `pd-kernel-bench --benchmark_filter=Threshold` sweeps model size × 1/2 threads to set
+/// it; so far it only ran on a machine at load 7–10, where the second thread lost 4× at every size.
+inline constexpr std::size_t simd_parallel_min_bonds = 4096 * 100;
+
+} // namespace pd::kernel
