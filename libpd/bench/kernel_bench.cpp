@@ -2,20 +2,34 @@
 //
 // All benchmarks use Miranda's Model A lattice (node-based 83 × 9 × 7, λ = 0.05 m, δ = 2√3 λ,
 // 5229 particles, 319,533 bonds with the inclusive horizon rule) at a small smooth deformation.
-//  * HandWrittenElastic: a plain CSR gather loop written out by hand (exact stretch, uniform c).
-//  * Dispatched/<effects>: the kernel picked by make_force_evaluator for that effect set.
-// Elastic-exact through the dispatcher should match the hand-written loop within noise; the
-// other rows show what each effect costs when it is switched on.
-#include "libpd/kernel/force_kernel.hpp"
+//  * HandWrittenElastic: a plain scalar CSR gather loop written out by hand (exact, uniform c).
+//  * HandWrittenSimd: the same loop vectorised by hand over Highway (handwritten_simd.cpp).
+//  * Dispatched/<effects>: the kernel picked by make_force_evaluator for that effect set
+//    (SIMD path); Scalar/<effects>: the retained scalar kernel.
+//  * Target/<isa>: elastic exact on one instruction set (SSE4, AVX2, AVX3 = AVX-512).
+//  * Threshold/<nx>/<threads>: elastic exact on Model A's cross-section, nx cells long, on 1 or 2
+//    threads with the parallel threshold bypassed: where the second thread starts to pay.
+// Elastic-exact through the dispatcher should match HandWrittenSimd within ±3 %; the other rows
+// show what each effect costs when it is switched on. Threads: OMP_NUM_THREADS.
+#include "handwritten_simd.hpp"
 #include "libpd/discretisation/model.hpp"
+#include "libpd/kernel/force_kernel.hpp"
+#include "libpd/kernel/simd_bond_loop.hpp"
 
+#include <algorithm>
 #include <benchmark/benchmark.h>
 #include <cmath>
+#include <hwy/targets.h>
 #include <string>
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
 
 namespace {
 
-pd::ModelSpec model_a(pd::StretchKind stretch, bool damage, bool plasticity, bool per_bond) {
+pd::ModelSpec model_a(pd::StretchKind stretch, bool damage, bool plasticity, bool per_bond,
+                      double length = 4.1) {
   pd::ModelSpec s;
   s.lattice.spacing = 0.05;
   s.lattice.horizon_factor = 2.0 * std::sqrt(3.0);
@@ -29,7 +43,7 @@ pd::ModelSpec model_a(pd::StretchKind stretch, bool damage, bool plasticity, boo
   s.materials = {m};
   pd::BodySpec b;
   b.name = "beam";
-  b.region.boxes = {pd::Box{{0, 0, 0}, {4.1, 0.4, 0.3}}};
+  b.region.boxes = {pd::Box{{0, 0, 0}, {length, 0.4, 0.3}}};
   s.bodies = {b};
   s.effects.stretch = stretch;
   s.effects.damage = damage;
@@ -91,10 +105,100 @@ void HandWrittenElastic(benchmark::State& state) {
   report(state, m);
 }
 
-void Dispatched(benchmark::State& state, pd::StretchKind stretch, bool damage, bool plasticity,
-                bool per_bond) {
-  pd::Model m = pd::build_model(model_a(stretch, damage, plasticity, per_bond));
+/// Particles [first, last) of thread t of `threads`, split by bond count like the SIMD evaluator.
+std::pair<std::size_t, std::size_t> my_rows(const pd::Model& m, std::size_t t,
+                                            std::size_t threads) {
+  const std::size_t n = m.size(), bonds = m.family.offsets[n];
+  const auto split = [&](std::size_t part) {
+    if (part >= threads) {
+      return n;
+    }
+    const auto* o = m.family.offsets.data();
+    return static_cast<std::size_t>(
+        std::lower_bound(o, o + n, bonds / threads * part + bonds % threads * part / threads) - o);
+  };
+  return {split(t), split(t + 1)};
+}
+
+void HandWrittenSimd(benchmark::State& state) {
+  pd::Model m = pd::build_model(model_a(pd::StretchKind::exact, false, false, false));
+  const auto y = deformed(m);
+  std::vector<double> b(y.size());
+  const pd_bench::HandWrittenData h{m.family.offsets.data(), m.family.neighbour.data(),
+                                    m.family.inverse_length.data(), m.field.stiffness};
+  for (auto _ : state) {
+#pragma omp parallel
+    {
+      std::size_t t = 0, threads = 1;
+#ifdef _OPENMP
+      t = static_cast<std::size_t>(omp_get_thread_num());
+      threads = static_cast<std::size_t>(omp_get_num_threads());
+#endif
+      const auto [first, last] = my_rows(m, t, threads);
+      pd_bench::hand_written_rows(h, y.data(), b.data(), first, last);
+    }
+    benchmark::DoNotOptimize(b.data());
+    benchmark::ClobberMemory();
+  }
+  state.SetLabel("simd/" + pd::kernel::simd_target_name());
+  report(state, m);
+}
+
+/// Elastic exact through the dispatcher on a model nx cells long, on state.range(1) threads,
+/// calling the row kernel directly so that the parallel threshold does not decide.
+void Threshold(benchmark::State& state) {
+  const auto nx = static_cast<double>(state.range(0));
+  pd::Model m =
+      pd::build_model(model_a(pd::StretchKind::exact, false, false, false, 0.05 * (nx - 1)));
+  const auto threads = static_cast<int>(state.range(1));
+  const auto rows = pd::kernel::simd_row_kernel(pd::StretchKind::exact, false, false, false);
+  const pd::KernelData d = pd::kernel_data(m);
+  const auto y = deformed(m);
+  std::vector<double> b(y.size());
+  for (auto _ : state) {
+#pragma omp parallel num_threads(threads)
+    {
+      std::size_t t = 0, nt = 1;
+#ifdef _OPENMP
+      t = static_cast<std::size_t>(omp_get_thread_num());
+      nt = static_cast<std::size_t>(omp_get_num_threads());
+#endif
+      const auto [first, last] = my_rows(m, t, nt);
+      rows(d, y.data(), b.data(), first, last);
+    }
+    benchmark::DoNotOptimize(b.data());
+    benchmark::ClobberMemory();
+  }
+  state.SetLabel(std::to_string(m.size()) + " particles, " +
+                 std::to_string(m.family.directed_bond_count()) + " directed bonds");
+  report(state, m);
+}
+
+/// Elastic exact on one instruction set (a bit of hwy's target mask, e.g. HWY_AVX2).
+void Target(benchmark::State& state, std::int64_t target) {
+  if ((hwy::SupportedTargets() & target) == 0) {
+    state.SkipWithError("instruction set not supported by this CPU");
+    return;
+  }
+  hwy::SetSupportedTargetsForTest(target);
+  pd::Model m = pd::build_model(model_a(pd::StretchKind::exact, false, false, false));
   auto forces = pd::make_force_evaluator(m);
+  hwy::SetSupportedTargetsForTest(0);
+  const auto y = deformed(m);
+  std::vector<double> b(y.size());
+  for (auto _ : state) {
+    forces->compute(y.data(), b.data());
+    benchmark::DoNotOptimize(b.data());
+    benchmark::ClobberMemory();
+  }
+  state.SetLabel(forces->description());
+  report(state, m);
+}
+
+void Dispatched(benchmark::State& state, pd::StretchKind stretch, bool damage, bool plasticity,
+                bool per_bond, pd::KernelPath path = pd::KernelPath::simd) {
+  pd::Model m = pd::build_model(model_a(stretch, damage, plasticity, per_bond));
+  auto forces = pd::make_force_evaluator(m, path);
   const auto y = deformed(m);
   std::vector<double> b(y.size());
   for (auto _ : state) {
@@ -108,6 +212,26 @@ void Dispatched(benchmark::State& state, pd::StretchKind stretch, bool damage, b
 
 using K = pd::StretchKind;
 BENCHMARK(HandWrittenElastic)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(HandWrittenSimd)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK_CAPTURE(Dispatched, scalar_elastic_exact, K::exact, false, false, false,
+                  pd::KernelPath::scalar)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+BENCHMARK_CAPTURE(Dispatched, scalar_elastic_fast, K::fast, false, false, false,
+                  pd::KernelPath::scalar)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+BENCHMARK_CAPTURE(Dispatched, scalar_damage_exact, K::exact, true, false, false,
+                  pd::KernelPath::scalar)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+BENCHMARK_CAPTURE(Target, SSE4, HWY_SSE4)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK_CAPTURE(Target, AVX2, HWY_AVX2)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK_CAPTURE(Target, AVX3, HWY_AVX3)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(Threshold)
+    ->ArgsProduct({{4, 8, 12, 16, 24, 32, 48, 64, 83}, {1, 2}})
+    ->Unit(benchmark::kMicrosecond)
+    ->UseRealTime();
 BENCHMARK_CAPTURE(Dispatched, elastic_exact, K::exact, false, false, false)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
