@@ -3,6 +3,7 @@
 
 #include <cstdio>
 #include <fmt/format.h>
+#include <fstream>
 
 #ifdef _OPENMP
 #include <omp.h>
@@ -30,6 +31,15 @@ int thread_count() {
 
 void add_threads_option(CLI::App& command, int& threads) {
   command.add_option("--threads", threads, "OpenMP threads (default: all)");
+}
+
+std::string load_average() {
+  std::ifstream in("/proc/loadavg");
+  std::string a, b, c;
+  if (!(in >> a >> b >> c)) {
+    return "unknown";
+  }
+  return a + " " + b + " " + c;
 }
 
 Scene load_or_explain(const std::string& path) {

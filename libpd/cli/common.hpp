@@ -23,6 +23,9 @@ void set_threads(int threads);
 int thread_count();
 void add_threads_option(CLI::App& command, int& threads);
 
+/// The first three fields of /proc/loadavg ("unknown" elsewhere), printed beside timings.
+std::string load_average();
+
 /// Load a scene and print its warnings on stderr.
 Scene load_or_explain(const std::string& path);
 

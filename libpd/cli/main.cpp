@@ -5,6 +5,7 @@
 //          [--checkpoint-every N] [--checkpoint FILE] [--restart FILE]
 //   pd info SCENE [--json]                    sizes, memory estimate, stable time step
 //   pd bench SCENE [--steps N] [--threads N]  force-evaluation throughput
+//          [--kernel simd|scalar] [--damage] [--lammps LMP]  (--lammps: alternate with LAMMPS)
 //   pd verify [CASE...] [-o DIR] [--list]     verification cases with their gates
 //   pd stability SCENE... [--integrator X]    measured vs predicted stable time steps
 //   pd compare dynamic|quasistatic [-o F]     integrator cost/accuracy rows (JSON lines)

@@ -9,6 +9,9 @@
 #   REPS=3                  repetitions per configuration (median is reported)
 #   BENCH_MPI_RANKS=2       optional: also time an MPI run with that many ranks (needs mpirun)
 #   BENCH_DIAGNOSTIC=0      skip the diagnostic 1-thread run without the contact loop (default 1)
+#   PD=build/bin/pd         optional: after each LAMMPS 1-thread run, time libpd on the same
+#                           lattice (pd bench model-a-benchmark.yaml --threads 1) and report the
+#                           median of the same-repetition ratios libpd/LAMMPS ("libpd" in the JSON)
 #
 # Prints one JSON object on stdout; progress goes to stderr.
 # Configurations: serial, 1 thread (OMP_NUM_THREADS=1, plain peri/pmb); and, only if this LAMMPS
@@ -27,6 +30,7 @@ REPS="${REPS:-3}"
 STEPS="${1:-600}"
 MPI_RANKS="${BENCH_MPI_RANKS:-}"
 DIAGNOSTIC="${BENCH_DIAGNOSTIC:-1}"
+PD="${PD:-}"
 
 die() { echo "run_lammps_bench.sh: error: $*" >&2; exit 1; }
 log() { echo "[lammps-bench] $*" >&2; }
@@ -130,6 +134,7 @@ run_cfg() {  # run_cfg CONFIG OUTFILE
 
 load_before="$(cut -d' ' -f1-3 /proc/loadavg 2>/dev/null || echo unknown)"
 declare -A loops pairs paircpus loopcpus
+pd_rates="" pd_ratios=""
 atoms="" partners="" nbuilds_all=""
 for ((r = 1; r <= REPS; r++)); do          # interleave configurations across repetitions
   for c in "${configs[@]}"; do
@@ -143,6 +148,13 @@ for ((r = 1; r <= REPS; r++)); do          # interleave configurations across re
     loops[$c]+="$l "; pairs[$c]+="$p "; paircpus[$c]+="$pc "; loopcpus[$c]+="$lc "
     nbuilds_all+="$nb "
     log "  loop $l s, pair $p s (pair %CPU $pc, loop %CPU $lc), neighbor builds $nb"
+    if [[ -n "$PD" && "$c" == t1 ]]; then  # libpd right after, under the same load
+      pd_rate="$("$PD" bench "$here/../../verification/scenes/model-a-benchmark.yaml" --threads 1 \
+                  --steps 200 --repeats 1 --json | sed -n 's/.*"bond_updates_per_second": *\([^,}]*\).*/\1/p')"
+      lmp_rate="$(awk -v b="$((pe / 2))" -v s="$STEPS" -v t="$l" 'BEGIN{printf "%.6g", b*s/t}')"
+      pd_rates+="$pd_rate "; pd_ratios+="$(awk -v a="$pd_rate" -v b="$lmp_rate" 'BEGIN{printf "%.4g", a/b}') "
+      log "  libpd $pd_rate bond updates/s, LAMMPS (loop) $lmp_rate -> ratio ${pd_ratios##* } (load $(cut -d' ' -f1 /proc/loadavg))"
+    fi
   done
 done
 load_after="$(cut -d' ' -f1-3 /proc/loadavg 2>/dev/null || echo unknown)"
@@ -196,6 +208,11 @@ else
   omp_note="this LAMMPS build has no OPENMP package (no peri/pmb/omp style): 2-thread run skipped"
 fi
 nb_max="$(printf '%s\n' $nbuilds_all | sort -g | tail -n1)"
+pd_json=""
+if [[ -n "$PD" ]]; then
+  # shellcheck disable=SC2086
+  pd_json=", \"libpd\": {\"command\": \"$PD bench verification/scenes/model-a-benchmark.yaml --threads 1 --steps 200 --repeats 1\", \"median_bond_updates_per_second\": $(median $pd_rates), \"median_ratio_to_lammps_loop\": $(median $pd_ratios), \"ratios\": [$(echo $pd_ratios | sed 's/ /, /g')]}"
+fi
 
 cat <<EOF
 {
@@ -217,6 +234,6 @@ cat <<EOF
   "nproc": $(nproc 2>/dev/null || echo null),
   "loadavg_before": "$load_before",
   "loadavg_after": "$load_after",
-  "threads": {$threads_json}$mpi_json$diag_json
+  "threads": {$threads_json}$mpi_json$diag_json$pd_json
 }
 EOF
