@@ -162,8 +162,13 @@ std::vector<Constraint> support_constraints(const ModelSpec& spec, const Particl
 
 EffectSet kernel_effects(const ModelSpec& spec, std::size_t materials_used) {
   EffectSet effects = spec.effects;
-  effects.per_bond_field =
-      materials_used > 1 || spec.corrections().corrects() || spec.lattice.volume_variation > 0;
+  // Consistently coupled mirror supports weight their bonds (mirror_constraints.hpp), so they need
+  // the per-bond field.
+  const bool weighted_mirrors = spec.mirror_coupling == MirrorCoupling::consistent &&
+                                std::any_of(spec.supports.begin(), spec.supports.end(),
+                                            [](const SupportSpec& s) { return s.mirrors(); });
+  effects.per_bond_field = materials_used > 1 || spec.corrections().corrects() ||
+                           spec.lattice.volume_variation > 0 || weighted_mirrors;
   effects.body_force = std::any_of(spec.loads.begin(), spec.loads.end(), [](const LoadSpec& l) {
     return l.load.kind == BoxRegionLoad::Kind::body;
   });
@@ -222,6 +227,7 @@ Model build_model(const ModelSpec& spec, ParticleSet particles) {
     throw std::runtime_error("the bodies contain no lattice particle");
   }
   m.family = build_bond_family(m.particles.position, dim, delta, spec.horizon_rule);
+  m.constraints = support_constraints(spec, m.particles);
 
   const std::set<std::uint16_t> used(m.particles.material.begin(), m.particles.material.end());
   m.effects = kernel_effects(spec, used.size());
@@ -246,8 +252,16 @@ Model build_model(const ModelSpec& spec, ParticleSet particles) {
     if (m.effects.plasticity) {
       m.field.bond_yield_stretch.resize(nb);
     }
-    const std::vector<double> correction =
+    std::vector<double> correction =
         bond_correction_factors(spec.corrections(), m.particles, m.family);
+    if (consistent_mirror_coupling(spec.mirror_coupling, m.constraints)) {
+      // The energy W_c of mirror_constraints.hpp: support bonds count ½, image–image bonds 0.
+      const auto weight = mirror_bond_weights(
+          m.family, mirror_dependent_particles(m.particles.size(), m.constraints));
+      for (std::size_t k = 0; k < correction.size(); ++k) {
+        correction[k] *= weight[k];
+      }
+    }
     for (std::size_t i = 0; i < n; ++i) {
       for (std::size_t k = m.family.offsets[i]; k < m.family.offsets[i + 1]; ++k) {
         const std::size_t j = m.family.neighbour[k];
@@ -273,7 +287,6 @@ Model build_model(const ModelSpec& spec, ParticleSet particles) {
     m.state.plastic_stretch.assign(m.family.directed_bond_count(), 0.0);
   }
 
-  m.constraints = support_constraints(spec, m.particles);
   const double tol = region_tolerance(spec);
 
   // Loads become force densities [N/m³]; a resultant is shared in proportion to particle volume.

@@ -75,15 +75,9 @@ public:
     for (std::size_t d = 0; d < q.size(); ++d) {
       u_[d] = q[d] * scale_[d];
     }
-    // Mirror supports move with their source particles (apply_constraints). On a regular lattice
-    // the bond (i, image of k) is the reflection of (k, image of i), so the operator stays
-    // symmetric.
-    for (const Constraint& c : m_.constraints) {
-      if (c.mirror_of != Constraint::no_mirror) {
-        u_[3 * c.particle + c.component] = c.mirror_sign * u_[3 * c.mirror_of + c.component];
-      }
-    }
-    apply_linearised_operator(m_, u_.data(), ku_.data());
+    // Mirror supports move with their source particles and, under consistent coupling, send
+    // their forces back: Rᵀ K R (discretisation/mirror_constraints.hpp).
+    apply_constrained_operator(m_, u_.data(), ku_.data());
     for (std::size_t d = 0; d < q.size(); ++d) {
       out[d] = ku_[d] * m_.particles.volume[d / 3] * scale_[d];
     }

@@ -39,11 +39,11 @@ namespace pd {
 
 std::vector<double> adr_fictitious_density(const Model& m) {
   const std::size_t n = m.size();
-  std::vector<double> lambda(3 * n, 0.0);
+  std::vector<double> rows(3 * n, 0.0);
   for (std::size_t i = 0; i < n; ++i) {
-    double row[3] = {0, 0, 0};
+    double* row = &rows[3 * i];
     // Every bond, broken or not: λ is the bound of the undamaged operator.
-    for_each_linearised_bond(m, i, BrokenBonds::included, [&row](const LinearisedBond& b) {
+    for_each_linearised_bond(m, i, BrokenBonds::included, [row](const LinearisedBond& b) {
       double l1 = 0;
       for (std::size_t c = 0; c < 3; ++c) {
         l1 += std::abs(b.direction[c]);
@@ -52,6 +52,13 @@ std::vector<double> adr_fictitious_density(const Model& m) {
         row[c] += 2.0 * b.stiffness * std::abs(b.direction[c]) * l1; // Gershgorin row sum of (i, c)
       }
     });
+  }
+  // A mirror master's row of Rᵀ K R also holds its dependants' rows (their columns fold onto
+  // masters too, which can only lower the absolute sum): adding them keeps the bound.
+  fold_mirror_bounds(m, rows.data());
+  std::vector<double> lambda(3 * n, 0.0);
+  for (std::size_t i = 0; i < n; ++i) {
+    const double* row = &rows[3 * i];
     const double largest = std::max({row[0], row[1], row[2]});
     for (std::size_t c = 0; c < 3; ++c) {
       // λ_ii = ¼ Δt² Σ_j |K_ij| with Δt = 1. A component without stiffness (y, z of a 1D model)

@@ -1,6 +1,7 @@
 #include "libpd/time/simulation.hpp"
 
 #include "libpd/core/binary_state.hpp"
+#include "libpd/kernel/linear_operator.hpp"
 #include "libpd/kernel/stable_time_step.hpp"
 
 #include <chrono>
@@ -42,7 +43,10 @@ Simulation::Simulation(Model& model, const SolverSpec& solver, const InitialSpec
     constrained_[3 * c.particle + c.component] = 1;
   }
 
-  forces_ = make_force_evaluator(model);
+  // Mirror dependants' forces go back to their images (Rᵀ) under consistent coupling, so every
+  // integrator sees the symmetric constrained operator (discretisation/mirror_constraints.hpp).
+  forces_ = make_constrained_force_evaluator(model);
+  massless_ = massless_mirror_particles(model);
   dt_stable_ = stable_time_step(model);
   IntegratorSettings is;
   is.kind = solver.integrator;
@@ -80,6 +84,9 @@ void Simulation::perturb(const std::vector<double>& du) {
 double Simulation::kinetic_energy() const {
   double ke = 0;
   for (std::size_t i = 0; i < model_.size(); ++i) {
+    if (massless_[i]) { // mirror dependants are images of the body, not mass (W_c's partner T)
+      continue;
+    }
     const double* v = &state_.velocity[3 * i];
     ke += 0.5 * model_.density[i] * model_.particles.volume[i] *
           (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);

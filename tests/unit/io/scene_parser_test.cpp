@@ -262,6 +262,19 @@ TEST(SceneParser, UnknownEnumValue) {
                "unknown value 'fastest' for 'model.stretch'\n  hint: did you mean 'fast'?"));
 }
 
+TEST(SceneParser, UnknownMirrorCoupling) {
+  EXPECT_TRUE(fails_at(yaml(minimal) + "model:\n  mirror_coupling: consistant\n", 15, 20,
+                       "unknown value 'consistant' for 'model.mirror_coupling'\n  hint: did you "
+                       "mean 'consistent'?"));
+}
+
+TEST(SceneParser, MirrorCouplingDefaultsToCopy) {
+  EXPECT_EQ(pd::parse_scene(yaml(minimal), "t").model.mirror_coupling, pd::MirrorCoupling::copy);
+  EXPECT_EQ(pd::parse_scene(yaml(minimal) + "model:\n  mirror_coupling: consistent\n", "t")
+                .model.mirror_coupling,
+            pd::MirrorCoupling::consistent);
+}
+
 TEST(SceneParser, UnknownEffect) {
   EXPECT_TRUE(fails_at(yaml(minimal) + "effects: [damage, cracking]\n", 14, 19,
                        "unknown value 'cracking'"));
@@ -765,6 +778,7 @@ model:
   stretch: fast
   surface_correction: macek-silling
   volume_correction: linear
+  mirror_coupling: consistent
 solver:
   integrator: damped-euler
   dt: 1e-6
@@ -867,6 +881,7 @@ output:
   EXPECT_EQ(m.effects.stretch, pd::StretchKind::fast);
   EXPECT_EQ(m.surface_correction, pd::SurfaceCorrection::macek_silling);
   EXPECT_EQ(m.volume_correction, pd::VolumeCorrection::linear);
+  EXPECT_EQ(m.mirror_coupling, pd::MirrorCoupling::consistent);
 
   const pd::SolverSpec& v = s.solver;
   EXPECT_EQ(v.integrator, pd::IntegratorKind::damped_euler);

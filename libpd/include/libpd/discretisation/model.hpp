@@ -6,6 +6,7 @@
 #include "libpd/discretisation/bond_family.hpp"
 #include "libpd/discretisation/corrections.hpp"
 #include "libpd/discretisation/lattice.hpp"
+#include "libpd/discretisation/mirror_constraints.hpp"
 #include "libpd/physics/effects.hpp"
 #include "libpd/physics/material.hpp"
 
@@ -37,18 +38,6 @@ struct BondState {
   std::vector<std::uint8_t> broken;    ///< per directed bond, damage only
   std::vector<double> plastic_stretch; ///< per directed bond, plasticity only
   std::vector<double> damage;          ///< per particle damage index φ (eq. 13), damage only
-};
-
-/// A prescribed displacement of one component of one particle. With a load ramp the value is
-/// reached gradually, u = F(t)·value (Miranda §3.2 step 14). A mirror constraint instead copies
-/// the displacement of another particle's same component, times ±1 (SupportSpec::mirror).
-struct Constraint {
-  static constexpr std::uint32_t no_mirror = std::numeric_limits<std::uint32_t>::max();
-  std::uint32_t particle = 0;
-  std::uint8_t component = 0;
-  double value = 0;
-  std::uint32_t mirror_of = no_mirror; ///< source particle of a mirror constraint
-  double mirror_sign = 0;              ///< u = mirror_sign · u(source)
 };
 
 struct BoxRegionLoad {
@@ -102,6 +91,9 @@ struct ModelSpec {
   EffectSet effects;
   SurfaceCorrection surface_correction = SurfaceCorrection::none;
   VolumeCorrection volume_correction = VolumeCorrection::none;
+  /// `copy` stays the default only until issue 14's default surface treatment lands: the shipped
+  /// structural scenes' correction pairs were calibrated against it.
+  MirrorCoupling mirror_coupling = MirrorCoupling::copy;
 
   /// What the bond corrections read of the model (corrections.hpp).
   CorrectionSpec corrections() const {
@@ -128,7 +120,8 @@ struct Model {
 
 /// The effect axes the force kernel is compiled for: the effects `spec` declares, plus the two
 /// that follow from the model rather than being declared, a per-bond field (several materials
-/// in use, a surface or volume correction, or varying particle volumes) and body forces (a load
+/// in use, a surface or volume correction, varying particle volumes, or consistently coupled
+/// mirror supports, whose bonds are weighted) and body forces (a load
 /// of kind `body`). `materials_used`: how many distinct materials the particles carry.
 EffectSet kernel_effects(const ModelSpec& spec, std::size_t materials_used);
 

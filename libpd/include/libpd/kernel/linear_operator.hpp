@@ -3,12 +3,21 @@
 // contributes the 3×3 blocks K_ii += k_ij n⊗n and K_ij = −k_ij n⊗n. The bonds are walked here
 // once, for the product K u of the spectral estimates (kernel/spectrum.hpp) and for the
 // Gershgorin row sums of ADR's fictitious density (time/adr.cpp).
+//
+// Mirror supports under `model.mirror_coupling: consistent` make the operator Rᵀ K R
+// (discretisation/mirror_constraints.hpp): the transpose Rᵀ on force densities and on bounds, the
+// massless dependants, the constrained product and the force evaluator that folds the kernel's
+// forces are here; the product uses the one bond loop above.
 #pragma once
 
 #include "libpd/discretisation/model.hpp"
+#include "libpd/kernel/force_kernel.hpp"
 
 #include <array>
 #include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <vector>
 
 namespace pd {
 
@@ -46,5 +55,31 @@ void for_each_linearised_bond(const Model& m, std::size_t i, BrokenBonds broken,
 /// out = K u per unit volume, (K u)_i = Σ_j k_ij n (n·(u_i − u_j)), broken bonds left out;
 /// u and out hold 3N values.
 void apply_linearised_operator(const Model& m, const double* u, double* out);
+
+/// consistent_mirror_coupling for a built model.
+bool consistent_mirror_coupling(const Model& model);
+
+/// Per particle: 1 for the particles that carry no mass and are not integrated: the mirror
+/// dependants under consistent coupling, none under `copy`.
+std::vector<std::uint8_t> massless_mirror_particles(const Model& model);
+
+/// v_master += σ · v_dependant · V_dependant / V_master for every mirror constraint: the transpose
+/// of the constraint applied to a force density (3N). The dependants' entries are left as they
+/// are (they are reactions, never integrated). Does nothing unless consistent_mirror_coupling.
+void fold_mirror_forces(const Model& model, double* force_density);
+
+/// The same with |σ|, for non-negative per-dof bounds such as Gershgorin row sums (3N).
+void fold_mirror_bounds(const Model& model, double* bound);
+
+/// The linearised constrained operator: sets the mirror dependants' entries of u to R u (in place,
+/// as apply_constraints does), applies K (apply_linearised_operator), then folds the dependants'
+/// rows onto their masters (fold_mirror_forces): Rᵀ K R under consistent coupling, symmetric in
+/// the free degrees of freedom (weighted by volume); K_ff + K_fs R under `copy`.
+void apply_constrained_operator(const Model& m, double* u, double* ku);
+
+/// make_force_evaluator whose compute() then folds the mirror dependants' forces onto their
+/// masters (fold_mirror_forces): the plain evaluator unless consistent_mirror_coupling. The bond weights are already in the model's bond field
+/// (build_model), so strain_energy() is W_c (discretisation/mirror_constraints.hpp).
+std::unique_ptr<ForceEvaluator> make_constrained_force_evaluator(Model& model);
 
 } // namespace pd

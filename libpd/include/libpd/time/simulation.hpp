@@ -122,6 +122,7 @@ private:
   double blowup_squared_ = 0;
   /// 1 for each constrained degree of freedom; fixed for the run, so built once.
   std::vector<std::uint8_t> constrained_;
+  std::vector<std::uint8_t> massless_; ///< mirror dependants (no mass, no kinetic energy)
   /// Step at which the current run started; a restored run keeps the original one.
   std::size_t run_origin_ = 0;
   bool resumed_ = false;

@@ -15,6 +15,9 @@ struct SceneModelOptions {
   StretchKind stretch = EffectSet{}.stretch;
   SurfaceCorrection surface_correction = SurfaceCorrection::tensor;
   VolumeCorrection volume_correction = VolumeCorrection::moment;
+  /// `copy` stays the default only until issue 14's default surface treatment lands: the shipped
+  /// structural scenes' correction pairs were calibrated against it (mirror_constraints.hpp).
+  MirrorCoupling mirror_coupling = MirrorCoupling::copy;
 };
 
 constexpr Key model_keys[] = {
@@ -34,6 +37,14 @@ constexpr Key model_keys[] = {
             "moment-matched lattice weights (moment)",
      .choices = enum_words<VolumeCorrection>,
      .bind = field_with_default<&SceneModelOptions::volume_correction>()},
+    {.name = "mirror_coupling",
+     .type = Type::choice,
+     .doc = "mirror supports: copy (support particles copy their images' displacements, one-sided, "
+            "not energy-conserving; the default while the structural scenes' correction pairs are "
+            "calibrated on it) or consistent (forces sent back to the images: symmetric, "
+            "energy-conserving)",
+     .choices = enum_words<MirrorCoupling>,
+     .bind = field_with_default<&SceneModelOptions::mirror_coupling>()},
 };
 
 } // namespace
@@ -55,6 +66,7 @@ void read_model_options(Reader& r, ModelSpec& model, Marks& marks) {
   model.effects.stretch = options.stretch;
   model.surface_correction = options.surface_correction;
   model.volume_correction = options.volume_correction;
+  model.mirror_coupling = options.mirror_coupling;
 }
 
 } // namespace pd::scene
