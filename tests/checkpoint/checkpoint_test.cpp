@@ -2,8 +2,8 @@
 // scene), and a Simulation saved mid-run and restored into a fresh one continues bitwise like the
 // run that never stopped, for every integrator that allows checkpoints. The end-to-end test of
 // `pd run` killed with SIGKILL is kill_restart_test.py.
-#include "libpd/io/checkpoint.hpp"
 #include "libpd/app/run.hpp"
+#include "libpd/io/checkpoint.hpp"
 #include "libpd/io/scene.hpp"
 
 #include <algorithm>

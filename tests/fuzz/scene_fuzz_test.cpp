@@ -15,8 +15,8 @@
 // Environment: PD_FUZZ_CASES (default 300), PD_FUZZ_SEED, PD_FUZZ_FIRST (first case index),
 // PD_FUZZ_ONLY (run one case and print its text), PD_FUZZ_CASE_SECONDS (watchdog, default 120).
 // PD_MEMORY_LIMIT defaults to 1G here so the guard refuses the same cases on every machine.
-#include "libpd/io/resources.hpp"
 #include "libpd/app/run.hpp"
+#include "libpd/io/resources.hpp"
 #include "libpd/io/scene.hpp"
 
 #include <algorithm>

@@ -26,12 +26,13 @@
 //
 // SUNDIALS issue #311 (fixed in 6.7.0). At the end of a step ERKStep 6.4.1 copies the last
 // stage's right-hand side into the first stage of the next step whenever c_s = 1, even if the last
-// row of A differs from bᵀ (not FSAL). Measured on y'' = −y (tests/unit/time/integrator_order_test.cpp):
-// classic RK4 falls to order 3, ARK324L2SA-ERK and Sayfy–Aburub to order 2, and Heun–Euler keeps
-// order 2 but has a 2.5× larger error and grows far faster. For the offered tables with c_s = 1
-// that are not FSAL (heun-euler, rk4) the integrator calls ERKStepReset before every step, which
-// makes ERKStep recompute f(t_n, y_n) for the first stage: s right-hand sides per step, the correct
-// count for a non-FSAL table. Native tables with c_s ≠ 1 or true FSAL need no work-around.
+// row of A differs from bᵀ (not FSAL). Measured on y'' = −y
+// (tests/unit/time/integrator_order_test.cpp): classic RK4 falls to order 3, ARK324L2SA-ERK and
+// Sayfy–Aburub to order 2, and Heun–Euler keeps order 2 but has a 2.5× larger error and grows far
+// faster. For the offered tables with c_s = 1 that are not FSAL (heun-euler, rk4) the integrator
+// calls ERKStepReset before every step, which makes ERKStep recompute f(t_n, y_n) for the first
+// stage: s right-hand sides per step, the correct count for a non-FSAL table. Native tables with
+// c_s ≠ 1 or true FSAL need no work-around.
 //
 // Checkpoints (fixed steps). A continuing ERKStep enters step n+1 with f(t_n, y_n) in hand:
 // evaluated at the end of step n (c_s ≠ 1) or copied from step n's last stage (c_s = 1). For FSAL

@@ -1,8 +1,8 @@
 #include "libpd/time/stability.hpp"
 
 #include "libpd/kernel/force_kernel.hpp"
-#include "libpd/time/simulation.hpp"
 #include "libpd/kernel/stable_time_step.hpp"
+#include "libpd/time/simulation.hpp"
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>

@@ -20,5 +20,4 @@ struct Constraint {
   double mirror_sign = 0;              ///< u = mirror_sign · u(source)
 };
 
-
 } // namespace pd

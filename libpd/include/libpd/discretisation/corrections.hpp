@@ -49,7 +49,6 @@ struct EnumName<VolumeCorrection> {
   }};
 };
 
-
 /// What the corrections read of a model: its dimension, lattice, horizon rule and the two
 /// corrections (ModelSpec::corrections()).
 struct CorrectionSpec {

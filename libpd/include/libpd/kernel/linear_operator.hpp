@@ -78,8 +78,9 @@ void fold_mirror_bounds(const Model& model, double* bound);
 void apply_constrained_operator(const Model& m, double* u, double* ku);
 
 /// make_force_evaluator whose compute() then folds the mirror dependants' forces onto their
-/// masters (fold_mirror_forces): the plain evaluator unless consistent_mirror_coupling. The bond weights are already in the model's bond field
-/// (build_model), so strain_energy() is W_c (discretisation/mirror_constraints.hpp).
+/// masters (fold_mirror_forces): the plain evaluator unless consistent_mirror_coupling. The bond
+/// weights are already in the model's bond field (build_model), so strain_energy() is W_c
+/// (discretisation/mirror_constraints.hpp).
 std::unique_ptr<ForceEvaluator> make_constrained_force_evaluator(Model& model);
 
 } // namespace pd

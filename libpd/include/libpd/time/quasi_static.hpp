@@ -38,7 +38,7 @@ struct Settings {
   std::size_t max_iterations = 400; ///< per increment, ramp included
   std::size_t check_every = 10;
   double residual_tolerance = 1e-3;
-  double wall_limit_seconds = 0;    ///< stop after the increment that crosses it; 0: none
+  double wall_limit_seconds = 0; ///< stop after the increment that crosses it; 0: none
   bool progress = false;
   /// Checked after every increment; true ends the run early (e.g. a sweep that only needs the
   /// peak). Empty: run all increments.

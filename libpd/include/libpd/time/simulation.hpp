@@ -3,8 +3,8 @@
 #pragma once
 
 #include "libpd/core/names.hpp"
-#include "libpd/time/integrator.hpp"
 #include "libpd/discretisation/model.hpp"
+#include "libpd/time/integrator.hpp"
 
 #include <array>
 #include <cstdint>

@@ -13,9 +13,9 @@
 // than a threshold or any value becomes non-finite.
 #pragma once
 
-#include "libpd/time/integrator.hpp"
 #include "libpd/discretisation/model.hpp"
 #include "libpd/kernel/spectrum.hpp"
+#include "libpd/time/integrator.hpp"
 #include "libpd/time/simulation.hpp"
 
 #include <cstdint>
