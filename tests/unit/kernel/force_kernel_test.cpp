@@ -1,7 +1,8 @@
 // The force kernel against a naive reference written from the papers (Miranda et al. 2019 eqs.
 // 6–17 and 27), for every combination of stretch measure × plasticity × damage × field storage.
-#include "libpd/kernel/force_kernel.hpp"
+#include "effect_combos.hpp"
 #include "libpd/discretisation/model.hpp"
+#include "libpd/kernel/force_kernel.hpp"
 
 #include <gtest/gtest.h>
 
@@ -25,31 +26,8 @@ constexpr double lambda = 0.1;
 constexpr double m_factor = 2.015; // δ/λ; no lattice distance within 1 % of δ
 constexpr double E = 30e9;
 
-struct Combo {
-  StretchKind stretch;
-  bool plasticity;
-  bool damage;
-  bool per_bond;
-
-  std::string label() const {
-    return pd::to_string(stretch) + (plasticity ? " plastic" : " elastic") +
-           (damage ? " damage" : "") + (per_bond ? " per-bond" : " uniform");
-  }
-};
-
-std::vector<Combo> all_combos() {
-  std::vector<Combo> out;
-  for (StretchKind s : {StretchKind::exact, StretchKind::modified, StretchKind::fast}) {
-    for (bool p : {false, true}) {
-      for (bool d : {false, true}) {
-        for (bool f : {false, true}) {
-          out.push_back({s, p, d, f});
-        }
-      }
-    }
-  }
-  return out;
-}
+using pd::test::all_combos;
+using pd::test::Combo;
 
 /// Box of nx × ny × nz cells. The per-bond variant has a second, stiffer and more brittle material
 /// for x > 0.2, the linear partial-volume correction and varying particle volumes; the uniform one

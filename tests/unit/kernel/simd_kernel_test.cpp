@@ -4,6 +4,7 @@
 //
 // (force_kernel_test.cpp checks the default — SIMD — path against a naive reference from the
 // paper.)
+#include "effect_combos.hpp"
 #include "libpd/discretisation/model.hpp"
 #include "libpd/kernel/force_kernel.hpp"
 #include "libpd/kernel/simd_bond_loop.hpp"
@@ -30,31 +31,8 @@ using pd::Vec3;
 
 constexpr double lambda = 0.1;
 
-struct Combo {
-  StretchKind stretch;
-  bool plasticity;
-  bool damage;
-  bool per_bond;
-
-  std::string label() const {
-    return pd::to_string(stretch) + (plasticity ? " plastic" : " elastic") +
-           (damage ? " damage" : "") + (per_bond ? " per-bond" : " uniform");
-  }
-};
-
-std::vector<Combo> all_combos() {
-  std::vector<Combo> out;
-  for (StretchKind s : {StretchKind::exact, StretchKind::modified, StretchKind::fast}) {
-    for (bool p : {false, true}) {
-      for (bool d : {false, true}) {
-        for (bool f : {false, true}) {
-          out.push_back({s, p, d, f});
-        }
-      }
-    }
-  }
-  return out;
-}
+using pd::test::all_combos;
+using pd::test::Combo;
 
 /// A box of nx × ny × nz cells; the per-bond variant has two materials, the linear partial-volume
 /// correction and varying volumes (as in force_kernel_test.cpp). Strengths are chosen so that the
