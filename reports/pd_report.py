@@ -14,6 +14,7 @@ Stages (each cached under DIR/cache/ by a hash of its inputs; see reports/README
   compare:*    `pd compare dynamic|quasistatic -o FILE.jsonl`.
   bench        `pd bench model-a-benchmark.yaml --stretch X --threads N --json`.
   kernel       `pd-kernel-bench --benchmark_format=json`.
+  peer         `pd bench model-a-benchmark.yaml --lammps lmp --json`: libpd/LAMMPS alternated.
   lammps       `bash reports/lammps/run_lammps_bench.sh`.
 Output: DIR/index.html, DIR/*.png, DIR/report.json, DIR/data/*.json (stage records).
 Exit code: 0 all stages ran and all gates passed, 2 a verification gate failed, 1 a stage failed.
@@ -95,7 +96,7 @@ def build_stages(ctx: S.Ctx, records: dict[str, dict]) -> list[S.Stage]:
     stages += [S.sweep_stage(ctx, c, listed) for c in sweep_cases]
     stages.append(S.stability_stage(ctx, FULL_STABILITY_SCENES if ctx.full else DEFAULT_STABILITY_SCENES))
     stages += [S.compare_stage(ctx, "dynamic"), S.compare_stage(ctx, "quasistatic")]
-    stages += [S.bench_stage(ctx), S.kernel_stage(ctx), S.lammps_stage(ctx)]
+    stages += [S.bench_stage(ctx), S.kernel_stage(ctx), S.peer_stage(ctx), S.lammps_stage(ctx)]
     return stages
 
 

@@ -1,8 +1,10 @@
 // pd bench SCENE [--steps N] [--repeats N] [--threads N] [--stretch exact|modified|fast]
 //                [--kernel simd|scalar] [--damage] [--lammps LMP [--lammps-input F]
-//                [--lammps-steps N]] [--json]
+//                [--lammps-steps N] [--lammps-var NAME=VALUE ...]] [--json]
 // Force-evaluation throughput in bond updates per second: the median of several repeats of N
-// force evaluations on a slightly deformed configuration, with the load average before and after.
+// force evaluations on a slightly deformed configuration, after an untimed warm-up (a second
+// thread's first few hundred milliseconds are slow on a VM), with the CPU that other processes
+// took meanwhile and the load average before and after.
 // With --lammps, each repeat runs LAMMPS first and libpd right after, so both see the same load;
 // the libpd/LAMMPS ratio is taken per repeat and its median reported.
 #include "commands.hpp"
@@ -35,6 +37,7 @@ struct BenchArgs {
   std::string lammps;                         ///< LAMMPS binary; empty: no LAMMPS runs
   std::string lammps_input = PD_LAMMPS_INPUT; ///< its input file (Model A)
   std::size_t lammps_steps = 600;
+  std::vector<std::string> lammps_vars; ///< extra `-var NAME VALUE` pairs, as NAME=VALUE
   bool json = false;
 };
 
@@ -46,7 +49,16 @@ struct Timings {
   std::size_t lammps_bonds = 0;
   std::string load_before;
   std::string load_after;
+  double other_cpu_cores = 0; ///< mean CPU other processes took during the timed evaluations
 };
+
+/// Above this many cores taken by others during the timed evaluations a figure is flagged as
+/// measured under load: more than a tenth of a core is more than timer and kernel noise.
+constexpr double busy_machine_cores = 0.1;
+
+/// Untimed warm-up: at least this long, so that every thread has run at full speed before the
+/// clock starts (measured: 2-thread repeats are up to 5× slow for the first ~0.5 s on this VM).
+constexpr double warm_up_seconds = 0.5;
 
 double median_of(std::vector<double> v) {
   std::sort(v.begin(), v.end());
@@ -67,7 +79,7 @@ std::vector<double> deformed_positions(const Model& model) {
 
 /// One LAMMPS run into `t` (rate and bond count); false if it failed.
 bool time_lammps(const BenchArgs& a, Timings& t) {
-  const auto run = run_lammps(a.lammps, a.lammps_input, a.lammps_steps);
+  const auto run = run_lammps(a.lammps, a.lammps_input, a.lammps_steps, a.lammps_vars);
   if (!run) {
     fmt::print(stderr, "error: LAMMPS run failed: {} -in {}\n", a.lammps, a.lammps_input);
     return false;
@@ -81,19 +93,26 @@ bool time_lammps(const BenchArgs& a, Timings& t) {
 std::optional<Timings> time_evaluations(const BenchArgs& a, const Model& model,
                                         ForceEvaluator& forces, int repeats) {
   std::vector<double> y = deformed_positions(model), b(3 * model.size());
-  forces.compute(y.data(), b.data()); // warm-up: page in every array
+  const auto warm_start = std::chrono::steady_clock::now();
+  do {
+    forces.compute(y.data(), b.data());
+  } while (std::chrono::duration<double>(std::chrono::steady_clock::now() - warm_start).count() <
+           warm_up_seconds);
   Timings t;
+  OtherCpuMeter others;
   t.load_before = load_average();
   for (int r = 0; r < repeats; ++r) {
     if (!a.lammps.empty() && !time_lammps(a, t)) {
       return std::nullopt;
     }
+    others.start();
     const auto t0 = std::chrono::steady_clock::now();
     for (std::size_t s = 0; s < a.steps; ++s) {
       forces.compute(y.data(), b.data());
     }
     t.seconds.push_back(
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+    others.stop();
     if (!a.lammps.empty()) {
       const double rate =
           bond_updates_per_second(model.family.bond_count(), a.steps, t.seconds.back());
@@ -101,6 +120,7 @@ std::optional<Timings> time_evaluations(const BenchArgs& a, const Model& model,
     }
   }
   t.load_after = load_average();
+  t.other_cpu_cores = others.cores();
   return t;
 }
 
@@ -118,8 +138,10 @@ void print_text(const BenchArgs& a, const Model& model, const ForceEvaluator& fo
     fmt::print("libpd / LAMMPS (median of same-repeat ratios): {:.2f}x  [{}]\n",
                median_of(t.ratios), fmt::join(t.ratios, ", "));
   }
-  fmt::print("load average before {} / after {} ({} cores)\n", t.load_before, t.load_after,
-             std::thread::hardware_concurrency());
+  fmt::print("load average before {} / after {} ({} cores); other processes took {:.2f} cores "
+             "during the timed evaluations{}\n",
+             t.load_before, t.load_after, std::thread::hardware_concurrency(), t.other_cpu_cores,
+             t.other_cpu_cores > busy_machine_cores ? ": MEASURED UNDER LOAD" : "");
 }
 
 void print_json(const BenchArgs& a, const Model& model, const ForceEvaluator& forces,
@@ -139,9 +161,14 @@ void print_json(const BenchArgs& a, const Model& model, const ForceEvaluator& fo
       bond_updates_per_second(model.family.bond_count(), a.steps, median);
   j["loadavg_before"] = t.load_before;
   j["loadavg_after"] = t.load_after;
+  j["other_cpu_cores"] = t.other_cpu_cores;
+  j["under_load"] = t.other_cpu_cores > busy_machine_cores;
+  j["warm_up_seconds"] = warm_up_seconds;
   if (!a.lammps.empty()) {
     j["lammps_bonds"] = t.lammps_bonds;
     j["lammps_steps"] = a.lammps_steps;
+    j["lammps_input"] = a.lammps_input;
+    j["lammps_vars"] = Json::array_of(a.lammps_vars);
     j["lammps_bond_updates_per_second"] = median_of(t.lammps_rates);
     j["lammps_bond_updates_per_second_all"] = Json::array_of(t.lammps_rates);
     j["ratio_to_lammps"] = median_of(t.ratios);
@@ -180,6 +207,10 @@ void add_lammps_options(CLI::App& cmd, BenchArgs& a) {
   cmd.add_option("--lammps-input", a.lammps_input, "LAMMPS input (Model A)")->capture_default_str();
   cmd.add_option("--lammps-steps", a.lammps_steps, "LAMMPS steps per repeat")
       ->capture_default_str();
+  cmd.add_option("--lammps-var", a.lammps_vars,
+                 "NAME=VALUE passed to LAMMPS as -var NAME VALUE (model-a.in: lambda 0.025 for "
+                 "Model B, jitter 0.25 for an irregular set); repeatable")
+      ->check([](const std::string& v) { return lammps_var_error(v); });
 }
 
 } // namespace

@@ -1,9 +1,13 @@
 // What the subcommands of `pd` share.
 #include "common.hpp"
 
+#include <algorithm>
+#include <chrono>
 #include <cstdio>
 #include <fmt/format.h>
 #include <fstream>
+#include <sys/resource.h>
+#include <unistd.h>
 
 #ifdef _OPENMP
 #include <omp.h>
@@ -40,6 +44,55 @@ std::string load_average() {
     return "unknown";
   }
   return a + " " + b + " " + c;
+}
+
+namespace {
+
+/// Busy seconds of all CPUs since boot (user, nice, system, irq, softirq, steal), -1 if unknown.
+double busy_cpu_seconds() {
+  std::ifstream in("/proc/stat");
+  std::string cpu;
+  double user = 0, nice = 0, system = 0, idle = 0, iowait = 0, irq = 0, softirq = 0, steal = 0;
+  if (!(in >> cpu >> user >> nice >> system >> idle >> iowait >> irq >> softirq >> steal) ||
+      cpu != "cpu") {
+    return -1;
+  }
+  return (user + nice + system + irq + softirq + steal) /
+         static_cast<double>(::sysconf(_SC_CLK_TCK));
+}
+
+double own_cpu_seconds() {
+  rusage u{};
+  ::getrusage(RUSAGE_SELF, &u);
+  const auto s = [](const timeval& t) {
+    return static_cast<double>(t.tv_sec) + 1e-6 * static_cast<double>(t.tv_usec);
+  };
+  return s(u.ru_utime) + s(u.ru_stime);
+}
+
+double wall_seconds() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+} // namespace
+
+void OtherCpuMeter::start() {
+  busy0_ = busy_cpu_seconds();
+  self0_ = own_cpu_seconds();
+  wall0_ = wall_seconds();
+}
+
+void OtherCpuMeter::stop() {
+  const double busy = busy_cpu_seconds();
+  if (busy < 0 || busy0_ < 0) {
+    return;
+  }
+  other_seconds_ += std::max(0.0, (busy - busy0_) - (own_cpu_seconds() - self0_));
+  wall_seconds_ += wall_seconds() - wall0_;
+}
+
+double OtherCpuMeter::cores() const {
+  return wall_seconds_ > 0 ? other_seconds_ / wall_seconds_ : 0.0;
 }
 
 Scene load_or_explain(const std::string& path) {

@@ -1,6 +1,8 @@
 // pd bench --lammps: one LAMMPS run through popen, parsed from its screen output.
 #include "lammps.hpp"
 
+#include <algorithm>
+#include <cctype>
 #include <cstdio>
 #include <cstdlib>
 #include <fmt/format.h>
@@ -8,11 +10,32 @@
 
 namespace pd::cli {
 
+std::string lammps_var_error(const std::string& var) {
+  const auto eq = var.find('=');
+  if (eq == std::string::npos || eq == 0 || eq + 1 == var.size()) {
+    return "expected NAME=VALUE";
+  }
+  const auto is_name = [](char c) {
+    return std::isalnum(static_cast<unsigned char>(c)) || c == '_';
+  };
+  const auto is_value = [&](char c) { return is_name(c) || c == '.' || c == '+' || c == '-'; };
+  if (!std::all_of(var.begin(), var.begin() + static_cast<std::ptrdiff_t>(eq), is_name) ||
+      !std::all_of(var.begin() + static_cast<std::ptrdiff_t>(eq) + 1, var.end(), is_value)) {
+    return "NAME may hold letters, digits and _, VALUE also . + -";
+  }
+  return {};
+}
+
 std::optional<LammpsRun> run_lammps(const std::string& lmp, const std::string& input,
-                                    std::size_t steps) {
+                                    std::size_t steps, const std::vector<std::string>& vars) {
+  std::string extra;
+  for (const auto& v : vars) {
+    const auto eq = v.find('=');
+    extra += fmt::format(" -var {} {}", v.substr(0, eq), v.substr(eq + 1));
+  }
   const std::string cmd = fmt::format("OMP_NUM_THREADS=1 '{}' -in '{}' -log none -echo none "
-                                      "-nocite -var steps {} 2>&1",
-                                      lmp, input, steps);
+                                      "-nocite -var steps {}{} 2>&1",
+                                      lmp, input, steps, extra);
   FILE* pipe = ::popen(cmd.c_str(), "r");
   if (pipe == nullptr) {
     return std::nullopt;

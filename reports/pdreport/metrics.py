@@ -118,6 +118,11 @@ def _performance(m: _Metrics, records: dict[str, dict]) -> None:
             rate = b.get("bond_updates_per_second")
             if rate:
                 m.add(f"kernel.{name}.bond_updates_per_second", rate, "rate")
+    rec = records.get("peer")
+    if R.ok(rec):
+        for r in rec["result"]["runs"]:
+            key = f"peer.{r['stretch']}{'.damage' if r['damage'] else ''}"
+            m.add(key + ".ratio_to_lammps", r.get("ratio_to_lammps"), "rate")
     rec = records.get("lammps")
     if R.ok(rec):
         for t, r in sorted(rec["result"].get("threads", {}).items()):

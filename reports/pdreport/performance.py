@@ -27,7 +27,8 @@ def section(page: Page) -> str:
             rows.append([esc(s), num_td(fnum(rate1)), num_td(fnum(rate2)),
                          num_td(f"{rate2 / rate1:.2f}×" if rate1 and rate2 else "–"),
                          num_td(f"{rate1 / base['bond_updates_per_second']:.2f}" if rate1 and base else "–"),
-                         num_td(fnum(r1 and r1.get("seconds"), 3)), esc((r1 or {}).get("kernel", ""))])
+                         num_td(fnum(r1 and r1.get("seconds"), 3)), esc((r1 or {}).get("kernel", "")),
+                         load_note(r1 or {}) + " / " + load_note(r2 or {})])
         libpd_1t = by.get(("exact", 1))
         r0 = runs[0]
         parts.append(f'<p class="note">Scene <code>{esc(rec["result"]["scene"])}</code>: '
@@ -35,7 +36,8 @@ def section(page: Page) -> str:
                      f"median of {r0.get('repeats')} repeats of {r0.get('steps')} force evaluations; "
                      f"load average during the stage {esc(rec['result'].get('loadavg'))}.</p>")
         parts.append(table(["stretch", "1 thread (bond updates/s)", "2 threads (bond updates/s)",
-                            "2 vs 1 thread", "1 thread vs exact", "1-thread median (s)", "kernel"],
+                            "2 vs 1 thread", "1 thread vs exact", "1-thread median (s)", "kernel",
+                            "others during the 1 / 2-thread run"],
                            rows, 'id="bench-table"'))
         fig, ax = plt.subplots(figsize=(6.4, 3.2))
         xs = range(len(R.STRETCHES))
@@ -50,12 +52,55 @@ def section(page: Page) -> str:
         parts.append(f'<img src="{page.savefig(fig, "bench-stretch.png")}" alt="bond updates per second">')
     parts.append("<h3>Cost of each effect (pd-kernel-bench)</h3>")
     parts.append(kernel_block(page))
+    parts.append("<h3>libpd / LAMMPS peri/pmb, alternated in one run (Model A, 1 thread)</h3>")
+    parts.append(peer_block(page))
     parts.append("<h3>LAMMPS peri/pmb beside libpd (Model A, 1 thread)</h3>")
     parts.append(lammps_block(page, libpd_1t))
     parts.append("<h3>Bonds per particle (infinite lattice) beside Miranda Table 1</h3>")
     parts.append(bonds_block(page))
     parts.append("</section>")
     return "".join(parts)
+
+
+# Issue 16's targets for the same-run ratio, per configuration (stretch, damage).
+PEER_TARGETS = {("exact", False): 12.0, ("exact", True): 11.0, ("fast", False): 16.0}
+
+
+def load_note(run: dict) -> str:
+    """'under load' in red when others took CPU during the timed evaluations (pd bench measures
+    it from /proc/stat), else the CPU they took; the load averages beside it."""
+    other = run.get("other_cpu_cores")
+    text = "–" if other is None else f"{other:.2f} cores"
+    if run.get("under_load"):
+        return f'<span class="fail">under load: others took {text}</span>'
+    return esc(text)
+
+
+def peer_block(page: Page) -> str:
+    rec = page.rec.get("peer")
+    if not R.ok(rec):
+        return failed_box(rec, "pd bench --lammps")
+    rows = []
+    for r in rec["result"]["runs"]:
+        target = PEER_TARGETS.get((r["stretch"], r["damage"]))
+        ratio = r.get("ratio_to_lammps")
+        met = ratio is not None and target is not None and ratio >= target
+        rows.append([esc(r["stretch"] + (" + damage" if r["damage"] else "")),
+                     num_td(fnum(r.get("bond_updates_per_second"))),
+                     num_td(fnum(r.get("lammps_bond_updates_per_second"))),
+                     num_td(f"{ratio:.2f}×" if ratio is not None else "–"),
+                     num_td(f"≥ {target:g}×" if target else "–"),
+                     '<span class="pass">met</span>' if met else '<span class="fail">not met</span>',
+                     load_note(r), esc(f"{r.get('loadavg_before')} / {r.get('loadavg_after')}")])
+    any_loaded = any(r.get("under_load") for r in rec["result"]["runs"])
+    warn = ('<p class="fail">Some figures were taken while other processes used the CPU: treat '
+            "them as indicative and re-measure on a quiet machine.</p>") if any_loaded else ""
+    return ('<p class="note">Each repeat runs LAMMPS, then libpd, so both see the same load; the '
+            "ratio is the median of the per-repeat ratios. \"Others\" is the CPU that other "
+            "processes (and the hypervisor) took during libpd's timed evaluations.</p>" + warn +
+            table(["configuration", "libpd (bond updates/s)", "LAMMPS (bond updates/s)",
+                   "libpd / LAMMPS", "target", "", "others during the run",
+                   "load average before / after"], rows, 'id="peer-table"'))
 
 
 def kernel_block(page: Page) -> str:

@@ -467,7 +467,7 @@ BENCH_SCENE = "verification/scenes/model-a-benchmark.yaml"
 
 def bench_stage(ctx: Ctx) -> Stage:
     scene = ctx.root / BENCH_SCENE
-    steps = "100"
+    steps = "300"  # ~0.05 s per 2-thread repeat: shorter repeats scatter more than the effect
     repeats = "7" if ctx.full else "5"
     configs = [(s, 1) for s in ("exact", "modified", "fast")] + [(s, 2) for s in ("exact", "modified", "fast")]
     cmds = [[str(ctx.pd), "bench", str(scene), "--stretch", s, "--threads", str(t), "--steps", steps,
@@ -530,6 +530,36 @@ def lammps_stage(ctx: Ctx) -> Stage:
 
     return Stage("lammps", "lammps", "LAMMPS peri/pmb on Model A", [cmd],
                  [script, inp] + ([Path(lmp)] if lmp else []), fn, default_seconds=40, env=env)
+
+
+# libpd beside LAMMPS in one process that alternates them (pd bench --lammps): the ratio is taken
+# per repeat under the same load, which is the figure issue 16's targets are stated in.
+PEER_CONFIGS = (("exact", False), ("exact", True), ("fast", False))
+
+
+def peer_stage(ctx: Ctx) -> Stage:
+    scene = ctx.root / BENCH_SCENE
+    lmp = shutil.which(os.environ.get("LMP", "lmp"))
+    inp = ctx.root / "reports" / "lammps" / "model-a.in"
+    cmds = [[str(ctx.pd), "bench", str(scene), "--threads", "1", "--stretch", s, "--steps", "300",
+             "--repeats", "7" if ctx.full else "5", "--lammps", lmp or "lmp", "--lammps-steps", "300",
+             "--json"] + (["--damage"] if damage else []) for s, damage in PEER_CONFIGS]
+
+    def fn(ctx: Ctx, st: Stage) -> dict:
+        if not lmp:
+            raise StageFailed("LAMMPS (lmp) is not installed: apt-get install lammps")
+        runs = []
+        for (s, damage), cmd in zip(PEER_CONFIGS, cmds):
+            p = run(ctx, cmd, f"peer-{s}{'-damage' if damage else ''}")
+            j = parse_json_output(p.stdout)
+            if not isinstance(j, dict) or "ratio_to_lammps" not in j:
+                raise StageFailed(f"`{shlex.join(cmd)}` printed no ratio")
+            j["stretch"], j["damage"] = s, damage
+            runs.append(j)
+        return {"scene": BENCH_SCENE, "runs": runs}
+
+    return Stage("peer", "lammps", "libpd and LAMMPS alternated (pd bench --lammps)", cmds,
+                 [ctx.pd, scene, inp] + ([Path(lmp)] if lmp else []), fn, default_seconds=60)
 
 
 def _loadavg() -> str:
