@@ -188,7 +188,7 @@ int bench(const BenchArgs& a) {
   }
   Model model = build_model(scene.model);
   auto forces = make_force_evaluator(model, *from_name<KernelPath>(a.kernel));
-  const auto timings = time_evaluations(a, model, *forces, std::max(a.repeats, 1));
+  const auto timings = time_evaluations(a, model, *forces, a.repeats);
   if (!timings) {
     return 1;
   }
@@ -205,8 +205,7 @@ void add_lammps_options(CLI::App& cmd, BenchArgs& a) {
                  "also time this LAMMPS binary (e.g. lmp) on --lammps-input, alternating with "
                  "libpd each repeat, and print the ratio");
   cmd.add_option("--lammps-input", a.lammps_input, "LAMMPS input (Model A)")->capture_default_str();
-  cmd.add_option("--lammps-steps", a.lammps_steps, "LAMMPS steps per repeat")
-      ->capture_default_str();
+  add_count_option(cmd, "--lammps-steps", a.lammps_steps, "LAMMPS steps per repeat");
   cmd.add_option("--lammps-var", a.lammps_vars,
                  "NAME=VALUE passed to LAMMPS as -var NAME VALUE (model-a.in: lambda 0.025 for "
                  "Model B, jitter 0.25 for an irregular set); repeatable")
@@ -219,9 +218,8 @@ Command add_bench_command(CLI::App& app) {
   auto a = std::make_shared<BenchArgs>();
   auto* cmd = app.add_subcommand("bench", "Force-evaluation throughput (bond updates per second)");
   cmd->add_option("scene", a->scene, "scene file (YAML)")->required();
-  cmd->add_option("--steps", a->steps, "force evaluations per repeat")->capture_default_str();
-  cmd->add_option("--repeats", a->repeats, "repeats; the median is reported")
-      ->capture_default_str();
+  add_count_option(*cmd, "--steps", a->steps, "force evaluations per repeat");
+  add_count_option(*cmd, "--repeats", a->repeats, "repeats; the median is reported");
   add_threads_option(*cmd, a->threads);
   cmd->add_option("--stretch", a->stretch, "override the stretch measure")
       ->check(CLI::IsMember(enum_word_list<StretchKind>()));

@@ -1,8 +1,11 @@
 // What the subcommands of `pd` share.
 #include "common.hpp"
 
+#include "libpd/core/text.hpp"
+
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <fmt/format.h>
 #include <fstream>
@@ -18,6 +21,12 @@ namespace pd::cli {
 void set_threads(int threads) {
 #ifdef _OPENMP
   if (threads > 0) {
+    const int processors = omp_get_num_procs();
+    if (threads > processors) {
+      fmt::print(stderr, "warning: --threads {} is more than the {} processors here; using {}\n",
+                 threads, processors, processors);
+      threads = processors;
+    }
     omp_set_num_threads(threads);
   }
 #else
@@ -34,7 +43,21 @@ int thread_count() {
 }
 
 void add_threads_option(CLI::App& command, int& threads) {
-  command.add_option("--threads", threads, "OpenMP threads (default: all)");
+  command.add_option("--threads", threads, "OpenMP threads, at least 1 (default: all)")
+      ->check(CLI::Range(1, 1 << 20));
+}
+
+CLI::Validator finite_in(double low, double high) {
+  return CLI::Validator(
+      [low, high](std::string& text) -> std::string {
+        double v = 0;
+        if (!CLI::detail::lexical_cast(text, v) || !std::isfinite(v) || !(v > low) ||
+            !(v <= high)) {
+          return fmt::format("expected a finite number in ({}, {}]", low, high);
+        }
+        return {};
+      },
+      fmt::format("in ({}, {}]", low, high));
 }
 
 std::string load_average() {
@@ -93,6 +116,20 @@ void OtherCpuMeter::stop() {
 
 double OtherCpuMeter::cores() const {
   return wall_seconds_ > 0 ? other_seconds_ / wall_seconds_ : 0.0;
+}
+
+std::string shorten_words(std::string_view message, std::size_t max_word_bytes) {
+  std::string out;
+  std::size_t i = 0;
+  while (i < message.size()) {
+    const std::size_t end = std::min(message.find_first_of(" \n", i), message.size());
+    out += printable(message.substr(i, end - i), max_word_bytes);
+    if (end < message.size()) {
+      out += message[end];
+    }
+    i = end + 1;
+  }
+  return out;
 }
 
 Scene load_or_explain(const std::string& path) {

@@ -7,6 +7,7 @@
 #include <CLI/CLI.hpp>
 #include <functional>
 #include <string>
+#include <string_view>
 
 namespace pd::cli {
 
@@ -18,10 +19,32 @@ struct Command {
   std::function<int()> run;
 };
 
-/// OpenMP threads for this process; 0 keeps the default (all).
+/// OpenMP threads for this process; 0 keeps the default (all). More threads than the machine
+/// has processors are capped to that number, with a warning (oversubscribed threads only wait
+/// for each other: 10,000 threads ran 230× slower).
 void set_threads(int threads);
 int thread_count();
+/// --threads N, N ≥ 1 (not given: all processors).
 void add_threads_option(CLI::App& command, int& threads);
+
+/// Largest count (steps, repeats, evaluations) any option takes: beyond it a run would not end in
+/// a lifetime, and it is far below where an integer type wraps.
+inline constexpr double max_count = 1e12;
+
+/// A count option (steps, repeats, every N steps): an integer in [min, max_count]. The range is
+/// checked on the text, before CLI11 converts it: it would turn "-1" into 2^64 − 1 for an
+/// unsigned target.
+template <class T>
+CLI::Option* add_count_option(CLI::App& command, const std::string& name, T& value,
+                              const std::string& doc, double min = 1) {
+  return command.add_option(name, value, doc)
+      ->check(CLI::Range(min, max_count))
+      ->capture_default_str();
+}
+
+/// A validator for a real option that must be finite and lie in (low, high]: CLI::Range lets NaN
+/// through, since every comparison with NaN is false.
+CLI::Validator finite_in(double low, double high);
 
 /// The first three fields of /proc/loadavg ("unknown" elsewhere), printed beside timings.
 std::string load_average();
@@ -41,6 +64,10 @@ private:
   double busy0_ = 0, self0_ = 0, wall0_ = 0;
   double other_seconds_ = 0, wall_seconds_ = 0;
 };
+
+/// A message with each word (between spaces and newlines) made printable and cut to
+/// `max_word_bytes` (pd::printable): for messages that quote what the user typed.
+std::string shorten_words(std::string_view message, std::size_t max_word_bytes = 60);
 
 /// Load a scene and print its warnings on stderr.
 Scene load_or_explain(const std::string& path);

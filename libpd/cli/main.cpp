@@ -14,9 +14,37 @@
 // Exit codes: 0 success, 1 bad input or usage, 2 a verification gate failed, 3 the run became
 // unstable, 4 a stability gate failed.
 #include "commands.hpp"
+#include "libpd/core/text.hpp"
 
+#include <algorithm>
 #include <fmt/format.h>
+#include <string_view>
 #include <vector>
+
+namespace {
+/// Messages of errors may quote file content and paths: long enough for any real path.
+constexpr std::size_t long_word_bytes = 400;
+
+/// No option or path pd takes is longer (PATH_MAX); longer arguments, and arguments with control
+/// bytes, are refused before anything echoes them.
+constexpr std::size_t longest_argument = 4096;
+
+/// Empty if every argument is acceptable, else why not.
+std::string argument_error(int argc, char** argv) {
+  for (int k = 1; k < argc; ++k) {
+    const std::string_view arg(argv[k]);
+    if (arg.size() > longest_argument) {
+      return fmt::format("argument {} is {} bytes long; none may exceed {}", k, arg.size(),
+                         longest_argument);
+    }
+    if (std::any_of(arg.begin(), arg.end(),
+                    [](char c) { return static_cast<unsigned char>(c) < 0x20 || c == 0x7F; })) {
+      return fmt::format("argument {} ('{}') holds control characters", k, pd::printable(arg));
+    }
+  }
+  return {};
+}
+} // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"pd — bond-based peridynamics with its own verification"};
@@ -27,7 +55,22 @@ int main(int argc, char** argv) {
       pd::cli::add_stability_command(app), pd::cli::add_compare_command(app),
       pd::cli::add_section_command(app),
   };
-  CLI11_PARSE(app, argc, argv);
+  if (const std::string why = argument_error(argc, argv); !why.empty()) {
+    fmt::print(stderr, "error: {}\n", why);
+    return 1;
+  }
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    // A usage error is exit 1 like any bad input (CLI11's own codes are 104–114); help stays 0.
+    // CLI11's message quotes the value given, which may be huge or hold control bytes.
+    if (e.get_exit_code() == 0) {
+      return app.exit(e);
+    }
+    fmt::print(stderr, "{}\nRun with --help for more information.\n",
+               pd::cli::shorten_words(e.what()));
+    return 1;
+  }
   try {
     for (const auto& command : commands) {
       if (*command.app) {
@@ -35,10 +78,10 @@ int main(int argc, char** argv) {
       }
     }
   } catch (const pd::SceneError& e) {
-    fmt::print(stderr, "{}\n", e.what());
+    fmt::print(stderr, "{}\n", pd::cli::shorten_words(e.what(), long_word_bytes));
     return 1;
   } catch (const std::exception& e) {
-    fmt::print(stderr, "error: {}\n", e.what());
+    fmt::print(stderr, "error: {}\n", pd::cli::shorten_words(e.what(), long_word_bytes));
     return 1;
   }
   return 0;

@@ -87,9 +87,10 @@ Command add_run_command(CLI::App& app) {
   cmd->add_option("-o,--output", a->out_dir, "output folder")->capture_default_str();
   add_threads_option(*cmd, a->threads);
   cmd->add_flag("--print-defaults", a->print_defaults, "print a commented scene template and exit");
-  cmd->add_option("--checkpoint-every", a->checkpoint_every,
-                  "write the complete run state every N steps (atomically; also at the end and "
-                  "on Ctrl-C)");
+  add_count_option(*cmd, "--checkpoint-every", a->checkpoint_every,
+                   "write the complete run state every N steps (atomically; also at the end and "
+                   "on Ctrl-C); 0: only then",
+                   0);
   cmd->add_option("--checkpoint", a->checkpoint,
                   "checkpoint file (default: OUTDIR/checkpoint.pdcp)");
   cmd->add_option("--restart", a->restart,

@@ -6,6 +6,7 @@
 
 #include "commands.hpp"
 #include "libpd/core/json.hpp"
+#include "libpd/core/text.hpp"
 #include "libpd/kernel/spectrum.hpp"
 
 #include <cmath>
@@ -63,11 +64,11 @@ std::optional<std::vector<StabilityTarget>> parse_targets(std::vector<std::strin
       fmt::print(stderr,
                  "error: unknown integrator '{}' (verlet, euler-cromer, damped-euler or "
                  "arkode:TABLE)\n",
-                 w);
+                 printable(w));
       return std::nullopt;
     }
     if (t->kind == IntegratorKind::arkode && !arkode_available()) {
-      fmt::print(stderr, "error: '{}' needs SUNDIALS, which this build lacks\n", w);
+      fmt::print(stderr, "error: '{}' needs SUNDIALS, which this build lacks\n", printable(w));
       return std::nullopt;
     }
     targets.push_back(*t);
@@ -181,12 +182,15 @@ Command add_stability_command(CLI::App& app) {
   cmd->add_option("--integrator", a->integrators,
                   "verlet, euler-cromer, damped-euler or arkode:TABLE (repeatable; default: "
                   "verlet and every offered table)");
-  cmd->add_option("--steps", a->steps, "steps of each bounded run")->capture_default_str();
+  add_count_option(*cmd, "--steps", a->steps, "steps of each bounded run",
+                   static_cast<double>(min_stability_steps));
   cmd->add_option("--tolerance", a->tolerance, "relative bisection tolerance")
+      ->check(finite_in(0, 0.5))
       ->capture_default_str();
   cmd->add_option("--gate", a->gate,
                   "exit with status 4 unless every measured limit is within this fraction "
-                  "of the finite-horizon prediction (and, for Verlet, not below eq. 31)");
+                  "of the finite-horizon prediction (and, for Verlet, not below eq. 31)")
+      ->check(finite_in(0, 10));
   cmd->add_flag("--json", a->json, "machine-readable output");
   add_threads_option(*cmd, a->threads);
   return {cmd, [a] { return stability(*a); }};

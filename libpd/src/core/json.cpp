@@ -1,5 +1,7 @@
 #include "libpd/core/json.hpp"
 
+#include "libpd/core/text.hpp"
+
 #include <cmath>
 #include <fmt/format.h>
 
@@ -55,7 +57,10 @@ void Json::push_back(Json v) {
 }
 
 namespace {
-std::string quote(const std::string& s) {
+// Strings are made valid UTF-8 first (a scene title may hold any bytes): parsers reject the
+// file otherwise.
+std::string quote(const std::string& raw) {
+  const std::string s = valid_utf8(raw);
   std::string out = "\"";
   for (char ch : s) {
     switch (ch) {
@@ -72,7 +77,7 @@ std::string quote(const std::string& s) {
       out += "\\t";
       break;
     default:
-      if (static_cast<unsigned char>(ch) < 0x20) {
+      if (static_cast<unsigned char>(ch) < 0x20 || ch == 0x7F) {
         out += fmt::format("\\u{:04x}", static_cast<int>(ch));
       } else {
         out += ch;

@@ -184,6 +184,11 @@ ModelSpec stability_model(const ModelSpec& spec) {
   ModelSpec s = spec;
   s.loads.clear(); // build_model derives body_force from the loads, so it goes with them
   s.effects.damping = false;
+  // The stable time step belongs to the elastic operator (eq. 31 and the spectrum are of it):
+  // bonds that break or yield under the growing perturbation would absorb its energy and make
+  // an unstable Δt look stable.
+  s.effects.damage = false;
+  s.effects.plasticity = false;
   return s;
 }
 
@@ -191,6 +196,15 @@ StabilityResult measure_stability(const ModelSpec& spec, const SolverSpec& solve
                                   const StabilityTarget& target, const StabilityOptions& opt,
                                   double omega_max) {
   const auto start = std::chrono::steady_clock::now();
+  if (!(opt.relative_tolerance > 0 && opt.relative_tolerance < 1)) {
+    throw std::invalid_argument(
+        fmt::format("the bisection tolerance must lie in (0, 1), not {}", opt.relative_tolerance));
+  }
+  if (opt.steps < min_stability_steps) {
+    throw std::invalid_argument(
+        fmt::format("a bounded run of {} steps cannot show a growing mode: use at least {} steps",
+                    opt.steps, min_stability_steps));
+  }
   const ModelSpec model_spec = stability_model(spec);
   SolverSpec unloaded = solver_spec;
   unloaded.damping = 0;
@@ -270,14 +284,29 @@ StabilityResult measure_stability(const ModelSpec& spec, const SolverSpec& solve
     return e <= opt.growth * e0;
   };
 
-  // Bracket around the eq. 31 guess, then bisect geometrically.
+  // Bracket around the eq. 31 guess, then bisect geometrically. A bracket that cannot be closed
+  // is an error, never a "measured" limit: lo must have been seen stable and hi unstable.
   const double guess = r.eq31 * scale;
   double lo = 0.5 * guess, hi = 2.0 * guess;
-  for (int i = 0; i < 20 && !stable_at(lo); ++i) {
+  constexpr int max_doublings = 20;
+  int halvings = 0;
+  while (!stable_at(lo)) {
+    if (++halvings > max_doublings) {
+      throw std::runtime_error(
+          fmt::format("{}: unstable even at Δt = {:.3g} s (2^-{} of the guess {:.3g} s)",
+                      r.integrator, lo, max_doublings, guess));
+    }
     hi = lo;
     lo *= 0.5;
   }
-  for (int i = 0; i < 20 && stable_at(hi); ++i) {
+  int doublings = 0;
+  while (stable_at(hi)) {
+    if (++doublings > max_doublings) {
+      throw std::runtime_error(fmt::format(
+          "{}: no instability within {} steps up to Δt = {:.3g} s ({}× eq. 31): the bounded "
+          "runs are too short to measure a limit",
+          r.integrator, opt.steps, hi, hi / r.eq31));
+    }
     lo = hi;
     hi *= 2.0;
   }

@@ -50,6 +50,10 @@ struct StabilityTarget {
   std::string label() const;
 };
 
+/// Fewest steps a bounded run may have: near the limit a mode grows by a factor close to 1 per
+/// step, so a shorter run calls almost any Δt stable.
+inline constexpr std::size_t min_stability_steps = 100;
+
 struct StabilityOptions {
   std::size_t steps = 1000; ///< N, steps of each bounded run
   double growth = 1e3;      ///< unstable when the energy exceeds growth × its initial value
