@@ -180,6 +180,47 @@ std::string StabilityTarget::label() const {
   return kind == IntegratorKind::arkode ? "arkode:" + to_string(table) : to_string(kind);
 }
 
+namespace {
+
+/// The largest Δt seen stable and the smallest seen unstable, bracketed around `guess` and
+/// bisected geometrically to the relative tolerance. A bracket that cannot be closed is an
+/// error, never a "measured" limit: lo must have been seen stable and hi unstable.
+template <class StableAt>
+std::pair<double, double> bracket_and_bisect(StableAt&& stable_at, double guess, double eq31,
+                                             const std::string& integrator,
+                                             const StabilityOptions& opt) {
+  double lo = 0.5 * guess, hi = 2.0 * guess;
+  constexpr int max_doublings = 20;
+  int halvings = 0;
+  while (!stable_at(lo)) {
+    if (++halvings > max_doublings) {
+      throw std::runtime_error(
+          fmt::format("{}: unstable even at Δt = {:.3g} s (2^-{} of the guess {:.3g} s)",
+                      integrator, lo, max_doublings, guess));
+    }
+    hi = lo;
+    lo *= 0.5;
+  }
+  int doublings = 0;
+  while (stable_at(hi)) {
+    if (++doublings > max_doublings) {
+      throw std::runtime_error(fmt::format(
+          "{}: no instability within {} steps up to Δt = {:.3g} s ({}× eq. 31): the bounded "
+          "runs are too short to measure a limit",
+          integrator, opt.steps, hi, hi / eq31));
+    }
+    lo = hi;
+    hi *= 2.0;
+  }
+  while (hi / lo > 1 + opt.relative_tolerance) {
+    const double mid = std::sqrt(lo * hi);
+    (stable_at(mid) ? lo : hi) = mid;
+  }
+  return {lo, hi};
+}
+
+} // namespace
+
 ModelSpec stability_model(const ModelSpec& spec) {
   ModelSpec s = spec;
   s.loads.clear(); // build_model derives body_force from the loads, so it goes with them
@@ -284,36 +325,7 @@ StabilityResult measure_stability(const ModelSpec& spec, const SolverSpec& solve
     return e <= opt.growth * e0;
   };
 
-  // Bracket around the eq. 31 guess, then bisect geometrically. A bracket that cannot be closed
-  // is an error, never a "measured" limit: lo must have been seen stable and hi unstable.
-  const double guess = r.eq31 * scale;
-  double lo = 0.5 * guess, hi = 2.0 * guess;
-  constexpr int max_doublings = 20;
-  int halvings = 0;
-  while (!stable_at(lo)) {
-    if (++halvings > max_doublings) {
-      throw std::runtime_error(
-          fmt::format("{}: unstable even at Δt = {:.3g} s (2^-{} of the guess {:.3g} s)",
-                      r.integrator, lo, max_doublings, guess));
-    }
-    hi = lo;
-    lo *= 0.5;
-  }
-  int doublings = 0;
-  while (stable_at(hi)) {
-    if (++doublings > max_doublings) {
-      throw std::runtime_error(fmt::format(
-          "{}: no instability within {} steps up to Δt = {:.3g} s ({}× eq. 31): the bounded "
-          "runs are too short to measure a limit",
-          r.integrator, opt.steps, hi, hi / r.eq31));
-    }
-    lo = hi;
-    hi *= 2.0;
-  }
-  while (hi / lo > 1 + opt.relative_tolerance) {
-    const double mid = std::sqrt(lo * hi);
-    (stable_at(mid) ? lo : hi) = mid;
-  }
+  const auto [lo, hi] = bracket_and_bisect(stable_at, r.eq31 * scale, r.eq31, r.integrator, opt);
   r.measured = lo;
   r.unstable = hi;
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
