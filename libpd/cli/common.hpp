@@ -13,7 +13,11 @@ namespace pd::cli {
 
 /// A subcommand: `run` is called after parsing if `app` was chosen and returns the exit code
 /// (0 success, 1 bad input or usage, 2 a verification gate failed, 3 the run became unstable,
-/// 4 a stability gate failed).
+/// 4 a stability gate failed, 5 the run was interrupted).
+/// Exit code of a run stopped by Ctrl-C, SIGTERM or SIGHUP (its results so far are written):
+/// not 0, so that a script or scheduler never takes a partial run for a finished one.
+inline constexpr int exit_interrupted = 5;
+
 struct Command {
   CLI::App* app = nullptr;
   std::function<int()> run;

@@ -12,7 +12,7 @@
 //   pd section SCENE [--depth z] [--plate]    PD/continuum stiffness of a beam or plate section
 //
 // Exit codes: 0 success, 1 bad input or usage, 2 a verification gate failed, 3 the run became
-// unstable, 4 a stability gate failed.
+// unstable, 4 a stability gate failed, 5 the run was interrupted (Ctrl-C, SIGTERM, SIGHUP).
 #include "commands.hpp"
 #include "libpd/core/text.hpp"
 

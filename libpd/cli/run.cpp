@@ -4,6 +4,7 @@
 
 #include "commands.hpp"
 
+#include <cstring>
 #include <fmt/format.h>
 #include <memory>
 #include <unistd.h>
@@ -20,6 +21,7 @@ struct RunArgs {
   std::size_t checkpoint_every = 0;
   std::string checkpoint;
   std::string restart;
+  bool overwrite = false;
 };
 
 void print_report(const RunArgs& a, const RunOutcome& out) {
@@ -30,10 +32,9 @@ void print_report(const RunArgs& a, const RunOutcome& out) {
       "{}: {} particles, {} bonds, {} steps of {:.4g} s (eq. 31 limit {:.4g} s), status {}\n",
       a.scene, out.particles, out.bonds, out.result.steps, out.result.dt, out.result.dt_stable,
       to_string(out.result.status));
-  fmt::print(
-      "wall {:.3f} s, {:.3g} bond updates/s, {} threads\n", out.result.wall_seconds,
-      bond_updates_per_second(out.bonds, out.result.force_evaluations, out.result.wall_seconds),
-      thread_count());
+  fmt::print("wall {:.3f} s, {:.3g} bond updates/s, {} threads\n", out.result.wall_seconds,
+             bond_updates_per_second(out.bonds, out.evaluations_this_run, out.result.wall_seconds),
+             thread_count());
   for (const auto& [name, value] : out.probes) {
     fmt::print("  probe {:<20} {:.9g}\n", name, value);
   }
@@ -65,14 +66,25 @@ int run(const RunArgs& a) {
   opt.checkpoint_every = a.checkpoint_every;
   opt.checkpoint = a.checkpoint;
   opt.restart = a.restart;
+  opt.overwrite = a.overwrite;
   const RunOutcome out = run_scene(scene, opt);
   print_report(a, out);
+  for (const auto& w : out.warnings) {
+    fmt::print(stderr, "warning: {}\n", w);
+  }
   if (!out.checkpoint_note.empty()) {
     fmt::print(stderr, "warning: {}\n", out.checkpoint_note);
   }
   if (out.result.status == RunStatus::unstable) {
     fmt::print(stderr, "error: {}\n", out.result.message);
     return 3;
+  }
+  if (out.result.status == RunStatus::interrupted) {
+    fmt::print(stderr, "interrupted{}: the results so far are written\n",
+               out.stop_signal ? fmt::format(" by signal {} ({})", out.stop_signal,
+                                             ::strsignal(out.stop_signal))
+                               : "");
+    return exit_interrupted;
   }
   return 0;
 }
@@ -93,6 +105,9 @@ Command add_run_command(CLI::App& app) {
                    0);
   cmd->add_option("--checkpoint", a->checkpoint,
                   "checkpoint file (default: OUTDIR/checkpoint.pdcp)");
+  cmd->add_flag("--overwrite", a->overwrite,
+                "reuse an output folder that holds another run's files: first remove exactly the "
+                "files its manifest.txt lists");
   cmd->add_option("--restart", a->restart,
                   "continue from a checkpoint of the same scene; the result is bitwise that of an "
                   "uninterrupted run")

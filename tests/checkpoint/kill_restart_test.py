@@ -55,6 +55,7 @@ VARIANTS = {
 
 # Fields of summary.json that legitimately differ between the two runs.
 VOLATILE = {"wall_seconds", "bond_updates_per_second", "setup_seconds", "checkpoint",
+            "force_evaluations_this_run", "stop_signal",
             "restarted_from"}
 
 
@@ -91,7 +92,8 @@ def run(pd, args, env):
 
 
 def files(folder):
-    return sorted(f for f in os.listdir(folder) if ".tmp-" not in f)
+    # .pd-lock holds the pid of the run that last held the folder: not a result.
+    return sorted(f for f in os.listdir(folder) if ".tmp-" not in f and f != ".pd-lock")
 
 
 def damage_mean(vtu):
@@ -177,6 +179,13 @@ def main():
                 diff = {k: (ja.get(k), jb.get(k)) for k in set(ja) | set(jb)
                         if ja.get(k) != jb.get(k)}
                 fail(f"summary.json differs: {diff}")
+        elif f == "manifest.txt":
+            # It lists every file in the folder, so also the interrupted run's last frame.
+            la = open(pa).read().splitlines()
+            lb = [l for l in open(pb).read().splitlines()
+                  if l in la or l != f"particles-{resumed:08d}.vtu"]
+            if la != lb:
+                fail(f"manifest.txt differs: {sorted(set(la) ^ set(lb))}")
         elif open(pa, "rb").read() != open(pb, "rb").read():
             fail(f"{f} differs between the uninterrupted and the restarted run")
 

@@ -77,9 +77,7 @@ Oscillation analyse(const std::vector<double>& t, const std::vector<double>& u) 
 
 Json run_bar_vibration(const Context& ctx) {
   const Scene scene = load_scene((ctx.scenes_dir / "bar-vibration.yaml").string());
-  RunOptions opt;
-  opt.output_dir = ctx.output_dir / "bar-vibration";
-  opt.progress = ctx.progress;
+  const RunOptions opt = case_run_options(ctx, "bar-vibration");
   const RunOutcome run = run_scene(scene, opt);
 
   const Material& steel = scene.model.materials.front();

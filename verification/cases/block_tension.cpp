@@ -23,8 +23,8 @@
 // Neither error is the clamp (the same at x = 0.245 m and 0.495 m) nor the λ refinement at fixed
 // δ/λ (the same lattice sums).
 #include "cases.hpp"
-#include "libpd/discretisation/corrections.hpp"
 #include "libpd/app/run.hpp"
+#include "libpd/discretisation/corrections.hpp"
 #include "libpd/io/scene.hpp"
 
 #include <array>
@@ -87,11 +87,14 @@ struct BlockResult {
   bool converged = false;
 };
 
-BlockResult run_block(const Scene& scene, const std::filesystem::path& out_dir, bool progress) {
+/// A run of the block; `folder` empty: write nothing.
+BlockResult run_block(const Scene& scene, const Context& ctx, const std::string& folder) {
   RunOptions opt;
-  opt.output_dir = out_dir;
-  opt.progress = progress;
-  opt.write_vtu = !out_dir.empty();
+  if (!folder.empty()) {
+    opt = case_run_options(ctx, folder);
+  }
+  opt.progress = ctx.progress;
+  opt.write_vtu = !folder.empty();
   const RunOutcome run = run_scene(scene, opt);
 
   const Box block = scene.model.bodies.front().region.boxes.front();
@@ -159,7 +162,7 @@ std::string describe(const BlockResult& r, const Scene& s) {
 Json run_block_tension(const Context& ctx) {
   const Scene base = load_scene((ctx.scenes_dir / "block-tension.yaml").string());
   const Scene scene = variant(base, base.model.lattice.spacing, base.model.lattice.horizon_factor);
-  BlockResult r = run_block(scene, ctx.output_dir / "block-tension", ctx.progress);
+  BlockResult r = run_block(scene, ctx, "block-tension");
   Json out;
   out["case"] = "block-tension";
   out["quantity"] = "centre-line u_x at the loaded end and lateral strain at mid-length";
@@ -190,7 +193,7 @@ Json run_block_tension_corrections(const Context& ctx) {
       Scene scene = variant(base, spacing, m0);
       scene.model.surface_correction = static_cast<SurfaceCorrection>(s);
       scene.model.volume_correction = static_cast<VolumeCorrection>(v);
-      const BlockResult r = run_block(scene, {}, ctx.progress);
+      const BlockResult r = run_block(scene, ctx, {});
       fmt::print("   {}\n", describe(r, scene));
       std::fflush(stdout);
       combos.push_back(r.json);
@@ -215,7 +218,7 @@ Json run_block_tension_corrections(const Context& ctx) {
           scene.model.surface_correction = SurfaceCorrection::none;
           scene.model.volume_correction = VolumeCorrection::none;
         }
-        BlockResult r = run_block(scene, {}, ctx.progress);
+        BlockResult r = run_block(scene, ctx, {});
         r.json["sweep"] = fixed_lambda ? "fixed spacing" : "fixed horizon";
         r.json["nominal_horizon_factor"] = ms[k];
         fmt::print("   [{}] {}\n", fixed_lambda ? "fixed λ" : "fixed δ", describe(r, scene));

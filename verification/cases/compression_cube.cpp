@@ -16,9 +16,9 @@
 // specimen a few times f_ct (lateral stretch ν ε), far below concrete's f_c/f_ct ≈ 15: see
 // QUASI_BRITTLE.md.
 #include "cases.hpp"
-#include "libpd/physics/material.hpp"
-#include "libpd/io/scene.hpp"
 #include "curve_recorder.hpp"
+#include "libpd/io/scene.hpp"
+#include "libpd/physics/material.hpp"
 #include "libpd/time/quasi_static.hpp"
 
 #include <algorithm>
@@ -184,8 +184,7 @@ CubeRun run_cube(const Scene& scene, const std::filesystem::path& dir, bool full
                            *zones.find("plate_faces")->number(), *zones.find("core")->number(),
                            inc.iterations, inc.residual, inc.converged ? 1 : 0);
       });
-  const auto outcome =
-      quasi_static::run(model, scene.solver, scene.initial, st, std::ref(record));
+  const auto outcome = quasi_static::run(model, scene.solver, scene.initial, st, std::ref(record));
   r.completed = outcome.completed;
   r.json["peak_stress_MPa"] = 1e-6 * r.peak_stress;
   r.json["peak_strain_percent"] = 100 * r.peak_strain;

@@ -20,9 +20,9 @@
 // 1.2 s0) stop once the load has fallen 30 % below the peak. See QUASI_BRITTLE.md for the
 // geometry (the paper's Figure 16 is not in our text), the derivation of s0 and the numbers.
 #include "cases.hpp"
-#include "libpd/physics/material.hpp"
-#include "libpd/io/scene.hpp"
 #include "curve_recorder.hpp"
+#include "libpd/io/scene.hpp"
+#include "libpd/physics/material.hpp"
 #include "libpd/time/quasi_static.hpp"
 
 #include <algorithm>
@@ -231,45 +231,45 @@ BeamRun run_beam(const Scene& scene, const std::filesystem::path& dir, bool full
   Json analyses = Json::array();
   const std::string header = "increment,displacement_mm,load_kN,reaction_left_kN,reaction_right_"
                              "kN,broken_bonds,iterations,residual,converged";
-  CurveRecorder record(
-      dir, header, vtu_increments, "rc-beam",
-      [&](const Simulation& sim, const quasi_static::IncrementInfo& inc) {
-        // The bonds push the loaded particles up (b_z > 0): the jack force is P = Σ b_z V.
-        const double p = quasi_static::bond_force(sim, load, 2);
-        const double rl = -quasi_static::bond_force(sim, left, 2);
-        const double rr = -quasi_static::bond_force(sim, right, 2);
-        const double d = inc.fraction * imposed_displacement;
-        r.last_load = p;
-        if (p > r.peak_load) {
-          r.peak_load = p;
-          r.peak_displacement = d;
-        }
-        const std::size_t broken = quasi_static::broken_bonds(sim.model());
-        for (int v : vtu_increments) {
-          if (v == inc.index) {
-            bool shear = false;
-            const double drop = r.peak_load > 0 ? 1.0 - p / r.peak_load : 0.0;
-            Json a = shear_analysis(sim.model(), g, drop, shear);
-            a["displacement_mm"] = 1e3 * d;
-            analyses.push_back(a);
-            if (std::abs(inc.fraction - 0.79) < 1e-9) {
-              r.shear_failure = shear;
-            }
-          }
-        }
-        Json row;
-        row["displacement"] = d;
-        row["load"] = p;
-        row["reactions"] = rl + rr;
-        row["broken_bonds"] = broken;
-        row["converged"] = inc.converged;
-        curve.push_back(row);
-        return fmt::format("{},{:.4f},{:.4f},{:.4f},{:.4f},{},{},{:.3e},{}", inc.index, 1e3 * d,
-                           1e-3 * p, 1e-3 * rl, 1e-3 * rr, broken, inc.iterations, inc.residual,
-                           inc.converged ? 1 : 0);
-      });
-  const auto outcome =
-      quasi_static::run(model, scene.solver, scene.initial, st, std::ref(record));
+  CurveRecorder record(dir, header, vtu_increments, "rc-beam",
+                       [&](const Simulation& sim, const quasi_static::IncrementInfo& inc) {
+                         // The bonds push the loaded particles up (b_z > 0): the jack force is P =
+                         // Σ b_z V.
+                         const double p = quasi_static::bond_force(sim, load, 2);
+                         const double rl = -quasi_static::bond_force(sim, left, 2);
+                         const double rr = -quasi_static::bond_force(sim, right, 2);
+                         const double d = inc.fraction * imposed_displacement;
+                         r.last_load = p;
+                         if (p > r.peak_load) {
+                           r.peak_load = p;
+                           r.peak_displacement = d;
+                         }
+                         const std::size_t broken = quasi_static::broken_bonds(sim.model());
+                         for (int v : vtu_increments) {
+                           if (v == inc.index) {
+                             bool shear = false;
+                             const double drop = r.peak_load > 0 ? 1.0 - p / r.peak_load : 0.0;
+                             Json a = shear_analysis(sim.model(), g, drop, shear);
+                             a["displacement_mm"] = 1e3 * d;
+                             analyses.push_back(a);
+                             if (std::abs(inc.fraction - 0.79) < 1e-9) {
+                               r.shear_failure = shear;
+                             }
+                           }
+                         }
+                         Json row;
+                         row["displacement"] = d;
+                         row["load"] = p;
+                         row["reactions"] = rl + rr;
+                         row["broken_bonds"] = broken;
+                         row["converged"] = inc.converged;
+                         curve.push_back(row);
+                         return fmt::format("{},{:.4f},{:.4f},{:.4f},{:.4f},{},{},{:.3e},{}",
+                                            inc.index, 1e3 * d, 1e-3 * p, 1e-3 * rl, 1e-3 * rr,
+                                            broken, inc.iterations, inc.residual,
+                                            inc.converged ? 1 : 0);
+                       });
+  const auto outcome = quasi_static::run(model, scene.solver, scene.initial, st, std::ref(record));
   r.completed = outcome.completed;
   if (full) {
     // The decision is taken on the 79 % state, the paper's Figures 18–19.

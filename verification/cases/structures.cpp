@@ -15,8 +15,8 @@
 // paper-resolution case also reruns with a 10× tighter tolerance and reports the difference as
 // the relaxation error, separately from the discretisation error (PD at the tight tolerance vs FE).
 #include "cases.hpp"
-#include "libpd/discretisation/corrections.hpp"
 #include "libpd/app/run.hpp"
+#include "libpd/discretisation/corrections.hpp"
 #include "libpd/io/scene.hpp"
 #include "section_stiffness.hpp"
 
@@ -298,10 +298,8 @@ Json run_once(const Scene& scene, const StructureCase& c, const Context& ctx,
               const std::string& tag, std::map<std::string, double>& values,
               std::map<std::string, double>& line_error, RunOutcome& outcome,
               bool write_vtu = true) {
-  RunOptions opt;
-  opt.output_dir = ctx.output_dir / (c.name + tag);
+  RunOptions opt = case_run_options(ctx, c.name + tag);
   opt.write_vtu = write_vtu;
-  opt.progress = ctx.progress;
   opt.keep_final_field = true;
   outcome = run_scene(scene, opt);
   if (outcome.result.status == RunStatus::unstable) {

@@ -25,8 +25,8 @@ public:
   using Row = std::function<std::string(const Simulation&, const quasi_static::IncrementInfo&)>;
 
   /// `dir` empty: nothing is written. `vtu_increments` are 1-based increment numbers.
-  CurveRecorder(std::filesystem::path dir, const std::string& header, std::vector<int> vtu_increments,
-                std::string vtu_prefix, Row row)
+  CurveRecorder(std::filesystem::path dir, const std::string& header,
+                std::vector<int> vtu_increments, std::string vtu_prefix, Row row)
       : dir_(std::move(dir)), csv_(header + "\n"), vtu_increments_(std::move(vtu_increments)),
         vtu_prefix_(std::move(vtu_prefix)), row_(std::move(row)) {}
 

@@ -1,6 +1,7 @@
 #include "verification.hpp"
 
 #include "cases.hpp"
+#include "libpd/app/output_folder.hpp"
 
 #include <cmath>
 #include <cstdlib>
@@ -10,6 +11,23 @@
 #endif
 
 namespace pd::verification {
+
+RunOptions case_run_options(const Context& ctx, const std::string& name) {
+  RunOptions opt;
+  opt.output_dir = ctx.output_dir / name;
+  opt.progress = ctx.progress;
+  opt.overwrite = true;
+  // A case folder is pd's own: files of a run from before manifests are its own too.
+  std::error_code ec;
+  if (!std::filesystem::exists(opt.output_dir / OutputFolder::manifest_name, ec)) {
+    for (const auto& entry : std::filesystem::directory_iterator(opt.output_dir, ec)) {
+      if (entry.is_regular_file() && is_run_output_name(entry.path().filename().string())) {
+        std::filesystem::remove(entry.path(), ec);
+      }
+    }
+  }
+  return opt;
+}
 
 const std::vector<Case>& all_cases() {
   static const std::vector<Case> cases = {

@@ -5,6 +5,7 @@
 // and `pd verify` exits non-zero when a gate fails.
 #pragma once
 
+#include "libpd/app/run_options.hpp"
 #include "libpd/io/output.hpp"
 
 #include <chrono>
@@ -29,6 +30,10 @@ struct Case {
 };
 
 const std::vector<Case>& all_cases();
+
+/// Run options for a case's run into its own folder ctx.output_dir/name: a rerun of the case
+/// replaces its previous run (overwrite), including one written before runs kept a manifest.
+RunOptions case_run_options(const Context& ctx, const std::string& name);
 
 /// Default scenes folder: $PD_SCENES_DIR, else the source tree's verification/scenes.
 std::filesystem::path default_scenes_dir();

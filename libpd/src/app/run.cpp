@@ -5,10 +5,13 @@
 #include "libpd/app/run.hpp"
 
 #include "libpd/app/interrupt.hpp"
+#include "libpd/app/output_folder.hpp"
 #include "libpd/app/progress.hpp"
+#include "libpd/app/run_checkpoints.hpp"
 #include "libpd/app/run_output.hpp"
 #include "libpd/app/run_summary.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <memory>
 #include <optional>
@@ -27,17 +30,61 @@ public:
 
   RunOutcome run() {
     const auto start = std::chrono::steady_clock::now();
+    claim_output();
     setup();
     restore();
     out_.setup_seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    advance();
-    save_final_state();
-    write_results();
+    {
+      // From the first step to the last file: a stop request (Ctrl-C, SIGTERM, SIGHUP) ends the
+      // stepping, and one arriving while the final files are written only repeats the request.
+      const InterruptGuard interrupt(options_.stop_on_interrupt);
+      advance(interrupt);
+      save_final_state();
+      write_results();
+    }
     return std::move(out_);
   }
 
 private:
+  // Claim the output. Before any work: the folder is created, proven writable and locked, and a
+  // checkpoint path that would destroy a file is refused — not found out after hours.
+  void claim_output() {
+    const bool checkpointing = options_.checkpoint_every > 0 || !options_.checkpoint.empty() ||
+                               (!options_.output_dir.empty() && options_.stop_on_interrupt);
+    if (checkpointing && !checkpoint_path(options_).empty()) {
+      check_checkpoint_target(checkpoint_path(options_), options_.output_dir);
+    }
+    if (!options_.output_dir.empty()) {
+      folder_.emplace(options_.output_dir, options_.overwrite, !options_.restart.empty());
+    }
+  }
+
+  // What the run will write, roughly (VTU frames, checkpoint), against the free disk space.
+  void check_disk_space() {
+    if (!folder_) {
+      return;
+    }
+    const double dt = sim_->dt();
+    double steps = static_cast<double>(scene_.solver.max_steps);
+    if (scene_.solver.end_time && dt > 0) {
+      const double to_end = *scene_.solver.end_time / dt;
+      steps = steps > 0 ? std::min(steps, to_end) : to_end;
+    }
+    double frames = 1;
+    if (options_.write_vtu && scene_.output.vtu && scene_.output.vtu_every > 0) {
+      frames += steps / static_cast<double>(scene_.output.vtu_every);
+    }
+    constexpr double vtu_bytes_per_particle = 200; // positions, displacement, damage as text
+    const double bytes = frames * vtu_bytes_per_particle * static_cast<double>(model_.size()) +
+                         2.0 * static_cast<double>(model_.memory_bytes());
+    const std::string warning =
+        folder_->check_space(static_cast<std::uint64_t>(std::min(bytes, 1e18)));
+    if (!warning.empty()) {
+      out_.warnings.push_back(warning);
+    }
+  }
+
   // Setup. The model, its simulation and the probes bound to its particles; the checkpoint
   // policy is checked here, so a run that could not be continued is refused before it starts.
   void setup() {
@@ -46,8 +93,9 @@ private:
     probes_ = resolve_probes(scene_.probes, model_);
     out_.particles = model_.size();
     out_.bonds = model_.family.bond_count();
-    output_.emplace(options_, scene_.output, probes_);
+    output_.emplace(folder_ ? &*folder_ : nullptr, options_, scene_.output, probes_);
     checkpoints_.emplace(options_, sim_->integrator().checkpoint_refusal());
+    check_disk_space();
   }
 
   // Restore. A restart continues the state, the probe history and the list of VTU frames of
@@ -59,25 +107,25 @@ private:
     CheckpointPolicy::restore(options_.restart, fingerprint(), probes_.size(), *sim_, out_.history,
                               output_->frames());
     out_.restarted_from_step = sim_->state().step;
+    evaluations_restored_ = sim_->integrator().force_evaluations();
   }
 
-  // Advance. The integrator's loop, with the recording after each step; SIGINT stops it
+  // Advance. The integrator's loop, with the recording after each step; a stop request ends it
   // cleanly between two steps (status `interrupted`). A fresh run's history starts with its
   // initial state (a restored history already holds that row).
-  void advance() {
+  void advance(const InterruptGuard& interrupt) {
     if (scene_.output.history_every > 0 && !out_.restarted_from_step) {
       record(*sim_);
     }
     ProgressLine progress(options_.progress, scene_.solver.end_time.value_or(0.0));
-    {
-      const InterruptGuard interrupt(options_.stop_on_interrupt);
-      out_.result = sim_->run([&](const Simulation& s) {
-        after_step(s);
-        progress.update(s);
-        return !interrupt.requested();
-      });
-    }
+    out_.result = sim_->run([&](const Simulation& s) {
+      after_step(s);
+      progress.update(s);
+      return !interrupt.requested();
+    });
     progress.clear();
+    out_.stop_signal = interrupt.signal();
+    out_.evaluations_this_run = out_.result.force_evaluations - evaluations_restored_;
   }
 
   // What each step leaves behind: a probe row, a VTU frame and a checkpoint when they are due,
@@ -100,6 +148,9 @@ private:
 
   // A checkpoint: the simulation's state with the run's record so far (history, VTU frames).
   void save_checkpoint(const Simulation& s) {
+    if (folder_) {
+      folder_->add(checkpoints_->file());
+    }
     checkpoints_->save(fingerprint(), s, out_.history, output_->frames());
     out_.checkpoint = checkpoints_->file();
     out_.checkpoint_step = s.state().step;
@@ -154,6 +205,8 @@ private:
 
   const Scene& scene_;
   const RunOptions& options_;
+  std::optional<OutputFolder> folder_; ///< claimed first, released last (holds the lock)
+  std::size_t evaluations_restored_ = 0;
   Model model_;
   std::unique_ptr<Simulation> sim_; ///< refers to model_, so made after it
   std::vector<ResolvedProbe> probes_;

@@ -9,11 +9,11 @@
 
 namespace pd {
 
-RunOutputWriter::RunOutputWriter(const RunOptions& options, const OutputSpec& output,
-                                 const std::vector<ResolvedProbe>& probes)
-    : dir_(options.output_dir), vtu_(!dir_.empty() && options.write_vtu && output.vtu),
-      vtu_every_(output.vtu_every), history_(!dir_.empty() && output.history_every > 0),
-      probes_(probes) {}
+RunOutputWriter::RunOutputWriter(OutputFolder* folder, const RunOptions& options,
+                                 const OutputSpec& output, const std::vector<ResolvedProbe>& probes)
+    : folder_(folder), dir_(folder ? folder->dir() : std::filesystem::path{}),
+      vtu_(!dir_.empty() && options.write_vtu && output.vtu), vtu_every_(output.vtu_every),
+      history_(!dir_.empty() && output.history_every > 0), probes_(probes) {}
 
 void RunOutputWriter::frame_if_due(const Simulation& sim) {
   if (vtu_ && vtu_every_ > 0 && sim.state().step % vtu_every_ == 0) {
@@ -31,7 +31,7 @@ void RunOutputWriter::write_probes(const ProbeHistory& history) {
   if (!history_) {
     return;
   }
-  write_file_atomically(dir_ / "probes.csv", probes_csv(probes_, history));
+  write("probes.csv", probes_csv(probes_, history));
   last_flush_ = std::chrono::steady_clock::now();
 }
 
@@ -44,13 +44,14 @@ void RunOutputWriter::write_final(const Simulation& sim, bool unstable, const Pr
     write_frame(sim);
   }
   if (history_) {
-    write_file_atomically(dir_ / "probes.csv", probes_csv(probes_, history.finite_rows()));
+    write("probes.csv", probes_csv(probes_, history.finite_rows()));
   }
-  write_file_atomically(dir_ / "summary.json", summary.dump());
+  write("summary.json", summary.dump());
 }
 
 void RunOutputWriter::write_frame(const Simulation& sim) {
   const std::string name = fmt::format("particles-{:08d}.vtu", sim.state().step);
+  folder_->add(dir_ / name);
   write_vtu(dir_ / name, sim);
   frames_.push_back({sim.state().time, name});
   std::string pvd =
@@ -59,7 +60,14 @@ void RunOutputWriter::write_frame(const Simulation& sim) {
     pvd += fmt::format("<DataSet timestep=\"{}\" file=\"{}\"/>\n", t, f);
   }
   pvd += "</Collection>\n</VTKFile>\n";
-  write_file_atomically(dir_ / "particles.pvd", pvd);
+  write("particles.pvd", pvd);
+}
+
+void RunOutputWriter::write(const std::string& name, const std::string& content) {
+  // Listed before it exists: a run killed between the two leaves a manifest naming a file that
+  // is missing, never a file that no manifest names.
+  folder_->add(dir_ / name);
+  write_file_atomically(dir_ / name, content);
 }
 
 } // namespace pd

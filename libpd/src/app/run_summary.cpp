@@ -32,8 +32,9 @@ Json run_summary(const Scene& scene, const Simulation& sim, const RunOutcome& ou
   j["wall_seconds"] = out.result.wall_seconds;
   j["bond_updates"] =
       static_cast<double>(out.bonds) * static_cast<double>(out.result.force_evaluations);
+  j["force_evaluations_this_run"] = out.evaluations_this_run;
   j["bond_updates_per_second"] =
-      bond_updates_per_second(out.bonds, out.result.force_evaluations, out.result.wall_seconds);
+      bond_updates_per_second(out.bonds, out.evaluations_this_run, out.result.wall_seconds);
   j["kinetic_energy"] = out.result.kinetic_energy;
   j["strain_energy"] = out.result.strain_energy;
   j["residual"] = out.result.residual;
@@ -43,8 +44,13 @@ Json run_summary(const Scene& scene, const Simulation& sim, const RunOutcome& ou
   for (const auto& [name, value] : out.probes) {
     pj[name] = value;
   }
-  if (!scene.warnings.empty()) {
-    j["warnings"] = Json::array_of(scene.warnings);
+  std::vector<std::string> warnings = scene.warnings;
+  warnings.insert(warnings.end(), out.warnings.begin(), out.warnings.end());
+  if (!warnings.empty()) {
+    j["warnings"] = Json::array_of(warnings);
+  }
+  if (out.stop_signal != 0) {
+    j["stop_signal"] = out.stop_signal;
   }
   if (!out.checkpoint.empty()) {
     j["checkpoint"] = out.checkpoint.string();

@@ -1,10 +1,13 @@
 #include "libpd/io/checkpoint.hpp"
 
+#include "libpd/core/file_input.hpp"
+
 #include <cerrno>
 #include <fcntl.h>
 #include <fmt/format.h>
 #include <fstream>
 #include <iterator>
+#include <limits>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -64,11 +67,12 @@ struct Parsed {
 };
 
 Parsed parse(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) {
-    refuse(path, "cannot be opened");
+  std::string s;
+  try {
+    s = read_regular_file(path, std::numeric_limits<std::size_t>::max());
+  } catch (const FileInputError& e) {
+    refuse(path, e.what());
   }
-  const std::string s((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   if (s.size() < sizeof magic || std::memcmp(s.data(), magic, sizeof magic) != 0) {
     refuse(path, "is not a libpd checkpoint (wrong magic bytes)");
   }
@@ -224,6 +228,10 @@ void write_checkpoint(const std::filesystem::path& path, const CheckpointFingerp
     ::fsync(dfd);
     ::close(dfd);
   }
+}
+
+bool is_checkpoint_file(const std::filesystem::path& path) {
+  return regular_file_starts_with(path, std::string(magic, sizeof magic));
 }
 
 CheckpointFingerprint read_checkpoint_fingerprint(const std::filesystem::path& path) {

@@ -1018,7 +1018,9 @@ TEST(SceneParser, MissingFile) {
     pd::load_scene("/nonexistent/scene.yaml");
     FAIL() << "no error";
   } catch (const pd::SceneError& e) {
-    EXPECT_EQ(std::string(e.what()).rfind("/nonexistent/scene.yaml: error: cannot open", 0), 0u)
+    EXPECT_EQ(std::string(e.what()).rfind(
+                  "/nonexistent/scene.yaml: error: the scene file cannot be opened", 0),
+              0u)
         << e.what();
     EXPECT_EQ(e.mark().line, 0);
     EXPECT_NE(std::string(e.what()).find("\n  hint: "), std::string::npos);

@@ -12,7 +12,10 @@ struct RunOptions {
   std::filesystem::path output_dir; ///< empty: write nothing
   bool progress = false;            ///< progress line on stderr
   bool write_vtu = true;
-  bool stop_on_interrupt = true; ///< SIGINT ends the run cleanly with status `interrupted`
+  bool stop_on_interrupt = true; ///< SIGINT/TERM/HUP end the run cleanly, status `interrupted`
+  /// An output folder holding another run's files (its manifest) is refused unless this is set;
+  /// then exactly the files that manifest lists are removed first (app/output_folder.hpp).
+  bool overwrite = false;
   bool keep_final_field = false; ///< return reference positions and final displacements
   /// Checkpoints (checkpoint.hpp): the complete run state every `checkpoint_every` steps (0:
   /// never), at the end of such a run, and when SIGINT interrupts any run that has a checkpoint

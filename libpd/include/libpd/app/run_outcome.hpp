@@ -33,6 +33,11 @@ struct RunOutcome {
   std::size_t checkpoints_written = 0;
   std::optional<std::size_t> restarted_from_step; ///< set when RunOptions::restart was used
   std::string checkpoint_note; ///< why no checkpoint was written on interrupt, if none was
+  /// Force evaluations done by this process: a restart's throughput counts only these, not
+  /// those of the run it continued.
+  std::size_t evaluations_this_run = 0;
+  int stop_signal = 0;               ///< the signal that interrupted the run, 0 if none
+  std::vector<std::string> warnings; ///< about the run's set-up (disk space), for the summary
 };
 
 /// bond updates per second: one update = one bond's force computed once per evaluation,

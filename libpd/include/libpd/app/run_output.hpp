@@ -3,6 +3,7 @@
 // stopped at any point leaves readable files behind.
 #pragma once
 
+#include "libpd/app/output_folder.hpp"
 #include "libpd/app/probes.hpp"
 #include "libpd/app/run_options.hpp"
 #include "libpd/core/json.hpp"
@@ -24,8 +25,9 @@ struct VtuFrame {
 
 class RunOutputWriter {
 public:
-  /// Writes nothing when options.output_dir is empty.
-  RunOutputWriter(const RunOptions& options, const OutputSpec& output,
+  /// Writes nothing when `folder` is null (no output folder); lists every file it writes in
+  /// the folder's manifest.
+  RunOutputWriter(OutputFolder* folder, const RunOptions& options, const OutputSpec& output,
                   const std::vector<ResolvedProbe>& probes);
 
   /// The frames written so far; a checkpoint carries them so that a restarted run's
@@ -46,7 +48,9 @@ public:
 
 private:
   void write_frame(const Simulation& sim);
+  void write(const std::string& name, const std::string& content);
 
+  OutputFolder* folder_;
   std::filesystem::path dir_;
   bool vtu_ = false;
   std::size_t vtu_every_ = 0;

@@ -46,6 +46,10 @@ struct CheckpointFingerprint {
 void write_checkpoint(const std::filesystem::path& path, const CheckpointFingerprint& fingerprint,
                       const CheckpointWriter& payload);
 
+/// True if `path` is a regular file that starts with the checkpoint magic bytes: the only kind of
+/// existing file a checkpoint may replace.
+bool is_checkpoint_file(const std::filesystem::path& path);
+
 /// Read and check a checkpoint: magic, version, byte order, size and checksum, then the
 /// fingerprint against `expected`. Returns a reader positioned at the start of the payload.
 /// Throws CheckpointError with a one-line reason otherwise.

@@ -71,6 +71,10 @@ struct Scene {
 
 /// Read and check a scene. Throws SceneError for every problem it can detect without running,
 /// including empty regions and loads or probes that select no particle.
+/// Largest scene file read: a scene is a page of YAML; far larger input is a mistake (or
+/// /dev/zero), and its values would be echoed in messages.
+inline constexpr std::size_t max_scene_bytes = std::size_t{16} << 20;
+
 Scene load_scene(const std::string& path);
 /// Same, from text (tests); `name` stands in for the file name in messages.
 Scene parse_scene(const std::string& text, const std::string& name);

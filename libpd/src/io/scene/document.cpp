@@ -1,6 +1,7 @@
 // Reading a scene file: the YAML document is scanned (one document, a map), then read section by
 // section (sections.hpp); every failure, including malformed YAML, becomes a SceneError with the
 // file, line and column and a hint.
+#include "libpd/core/file_input.hpp"
 #include "sections.hpp"
 
 #include <cerrno>
@@ -201,22 +202,15 @@ Scene parse_scene(const std::string& text, const std::string& name) {
 }
 
 Scene load_scene(const std::string& path) {
-  std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) {
-    throw SceneError(path, {}, "cannot read the scene: it is a directory",
-                     "give the path of a .yaml scene file");
+  std::string text;
+  try {
+    text = read_regular_file(path, max_scene_bytes);
+  } catch (const FileInputError& e) {
+    throw SceneError(
+        path, {}, fmt::format("the scene file {}", e.what()),
+        fmt::format("give the path of a .yaml scene file (at most {} MiB)", max_scene_bytes >> 20));
   }
-  std::ifstream in(path, std::ios::binary);
-  if (!in) {
-    throw SceneError(path, {}, fmt::format("cannot open the scene file: {}", std::strerror(errno)),
-                     "check the path and the file's permissions");
-  }
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (in.bad()) {
-    throw SceneError(path, {}, "cannot read the scene file", "check the file's permissions");
-  }
-  Scene scene = scene::parse(text.str(), path);
+  Scene scene = scene::parse(text, path);
   scene.path = path;
   return scene;
 }
