@@ -67,11 +67,9 @@ int run(const RunArgs& a) {
   opt.checkpoint = a.checkpoint;
   opt.restart = a.restart;
   opt.overwrite = a.overwrite;
+  opt.on_warning = [](const std::string& w) { fmt::print(stderr, "warning: {}\n", w); };
   const RunOutcome out = run_scene(scene, opt);
   print_report(a, out);
-  for (const auto& w : out.warnings) {
-    fmt::print(stderr, "warning: {}\n", w);
-  }
   if (!out.checkpoint_note.empty()) {
     fmt::print(stderr, "warning: {}\n", out.checkpoint_note);
   }

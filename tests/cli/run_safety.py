@@ -3,6 +3,7 @@
 """
 import json
 import os
+import re
 import signal
 import subprocess
 import time
@@ -138,6 +139,19 @@ class RunSafety(pdcli.TestCase):
         s = read_json(os.path.join(out, "summary.json"))
         self.assertEqual(s["force_evaluations_this_run"], 0)  # it was finished already
         self.assertLessEqual(s["bond_updates_per_second"], max(10 * rate0, 1e10))
+
+
+    # Item 2 (first part): an explicit Δt above the eq. 31 limit ran silently to end_time.
+    def test_explicit_dt_above_the_limit_is_a_warning(self):
+        r = self.pd("info", self.scene())
+        limit = float(re.search(r"stable dt \(eq. 31\)\s+(\S+)", r.stdout).group(1))
+        scene = self.scene("fast.yaml", integrator="verlet", effects="", dt=f"{1.23 * limit:.6g}",
+                           end_time=f"{10 * limit:.6g}", solver_extra="")
+        out = self.path("out")
+        r = self.pd("run", scene, "-o", out)
+        self.assertRegex(r.stderr, r"warning: solver.dt = .* is 1.23× the stable limit")
+        warnings = read_json(os.path.join(out, "summary.json")).get("warnings", [])
+        self.assertTrue(any("stable limit" in w for w in warnings), warnings)
 
 
 if __name__ == "__main__":

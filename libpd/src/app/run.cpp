@@ -13,6 +13,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <fmt/format.h>
 #include <memory>
 #include <optional>
 #include <vector>
@@ -81,7 +82,31 @@ private:
     const std::string warning =
         folder_->check_space(static_cast<std::uint64_t>(std::min(bytes, 1e18)));
     if (!warning.empty()) {
-      out_.warnings.push_back(warning);
+      warn(warning);
+    }
+  }
+
+  void warn(const std::string& warning) {
+    out_.warnings.push_back(warning);
+    if (options_.on_warning) {
+      options_.on_warning(warning);
+    }
+  }
+
+  // An explicit Δt above the eq. 31 limit (times the integrator's own factor) is said before the
+  // run and kept in the summary: such a run may still finish, and then its numbers must not pass
+  // unremarked. ADR's Δt is fictitious and has no such limit.
+  void check_time_step() {
+    if (!scene_.solver.dt || scene_.solver.integrator == IntegratorKind::adr) {
+      return;
+    }
+    const double limit = sim_->dt_stable() * sim_->integrator().stability_scale();
+    if (*scene_.solver.dt > limit) {
+      warn(fmt::format(
+          "solver.dt = {:.4g} s is {:.3g}× the stable limit {:.4g} s (Miranda eq. 31 × {:.3g} for "
+          "{}): the run may become unstable; use dt: auto or a smaller dt",
+          *scene_.solver.dt, *scene_.solver.dt / limit, limit, sim_->integrator().stability_scale(),
+          sim_->integrator().name()));
     }
   }
 
@@ -96,6 +121,7 @@ private:
     output_.emplace(folder_ ? &*folder_ : nullptr, options_, scene_.output, probes_);
     checkpoints_.emplace(options_, sim_->integrator().checkpoint_refusal());
     check_disk_space();
+    check_time_step();
   }
 
   // Restore. A restart continues the state, the probe history and the list of VTU frames of

@@ -5,6 +5,8 @@
 
 #include <cstddef>
 #include <filesystem>
+#include <functional>
+#include <string>
 
 namespace pd {
 
@@ -16,6 +18,9 @@ struct RunOptions {
   /// An output folder holding another run's files (its manifest) is refused unless this is set;
   /// then exactly the files that manifest lists are removed first (app/output_folder.hpp).
   bool overwrite = false;
+  /// Called with each warning about the run's set-up as soon as it is known (before the run);
+  /// the warnings also go into RunOutcome::warnings and summary.json.
+  std::function<void(const std::string&)> on_warning;
   bool keep_final_field = false; ///< return reference positions and final displacements
   /// Checkpoints (checkpoint.hpp): the complete run state every `checkpoint_every` steps (0:
   /// never), at the end of such a run, and when SIGINT interrupts any run that has a checkpoint
