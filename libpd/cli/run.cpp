@@ -3,6 +3,7 @@
 #include "libpd/app/run.hpp"
 
 #include "commands.hpp"
+#include "libpd/core/text.hpp"
 
 #include <cstring>
 #include <fmt/format.h>
@@ -36,7 +37,7 @@ void print_report(const RunArgs& a, const RunOutcome& out) {
              bond_updates_per_second(out.bonds, out.evaluations_this_run, out.result.wall_seconds),
              thread_count());
   for (const auto& [name, value] : out.probes) {
-    fmt::print("  probe {:<20} {:.9g}\n", name, value);
+    fmt::print("  probe {:<20} {:.9g}\n", printable(name), value);
   }
   if (!a.out_dir.empty()) {
     fmt::print("results in {}/summary.json\n", a.out_dir);

@@ -104,6 +104,27 @@ void check_resources(const Reader& r, const Scene& scene, const YAML::Node& spac
   }
 }
 
+/// Set-up visits every lattice offset within the horizon, and the moment-matched corrections
+/// every offset within m + 1 spacings: (2m + 3)^d of them, whatever the size of the bodies. Past
+/// this many the set-up alone takes minutes (and beyond ~10^18 the count itself overflows).
+constexpr double max_setup_offsets = 1e8;
+
+/// Refuse a horizon factor whose set-up work, not memory, is out of reach (m = 10^9 hung).
+void check_setup_work(const Reader& r, const Scene& scene, const YAML::Node& where) {
+  const double m = scene.model.lattice.horizon_factor;
+  const int dim = scene.model.dimension.dim;
+  const double offsets = std::pow(2.0 * m + 3.0, dim);
+  if (!(offsets <= max_setup_offsets)) {
+    const double largest = 0.5 * (std::pow(max_setup_offsets, 1.0 / dim) - 3.0);
+    r.fail(where,
+           fmt::format("horizon_factor {:.4g} means about {} lattice offsets to visit while "
+                       "setting up the bonds and corrections; libpd visits at most {:.0e}",
+                       m, format_count(offsets), max_setup_offsets),
+           fmt::format("use horizon_factor ≤ {:.0f} in {}D (typically 3.015 or 2√3)",
+                       std::floor(largest), dim));
+  }
+}
+
 /// Lattice positions are origin + kλ in double precision: far from 0 (in spacings) they lose the
 /// digits that bond lengths need, and lattice indices beyond 2^63 cannot even be formed. 10^9
 /// spacings keep positions exact to 10^-7 λ.
@@ -211,6 +232,8 @@ std::optional<ParticleSet> check_against_lattice(const Reader& r, const Scene& s
                                                  const Marks& marks) {
   const ModelSpec& model = scene.model;
   // Resources first: before anything is enumerated or allocated.
+  const auto* horizon = marks.lattice.find("horizon_factor");
+  check_setup_work(r, scene, (horizon ? horizon : marks.lattice.find("spacing"))->at());
   check_resources(r, scene, marks.lattice.find("spacing")->at());
   check_coordinates(r, model, marks);
   check_regions(r, model, marks);
