@@ -65,6 +65,22 @@ class Inputs(pdcli.TestCase):
         summary = json.loads(raw.decode("utf-8"))  # strict: raises on invalid UTF-8
         self.assertIn("title", summary["title"])
 
+    # Absurd settings ran without a word: E = 1e300 gave Δt = 4.5e-151 s; vtu_every 1 wrote
+    # thousands of files.
+    def test_absurd_run_sizes_are_warned_before_the_run(self):
+        text = self.scene_text().replace("youngs_modulus: 200e9", "youngs_modulus: 1e300")
+        text = text.replace("  damping: 1e6\n", "  damping: 1e6\n  max_steps: 100\n")
+        r = self.pd("run", self.scene("e300.yaml", text=text), "-o", self.path("a"))
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertRegex(r.stderr, r"warning: reaching end_time takes \S+e\+14\d steps")
+        text = self.scene_text().replace("vtu: false", "vtu: true").replace(
+            "vtu_every: 100", "vtu_every: 1").replace("end_time: 2e-4", "end_time: 2e-3")
+        r = self.pd("run", self.scene("many.yaml", text=text), "-o", self.path("b"))
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertRegex(r.stderr, r"warning: the run writes 1.\d+e\+03 VTU files")
+        with open(os.path.join(self.path("b"), "summary.json"), encoding="utf-8") as f:
+            self.assertTrue(any("VTU files" in w for w in json.load(f)["warnings"]))
+
     def scene_text(self):
         return pdcli.TINY_SCENE.format(effects="damping", integrator="damped-euler", dt="auto",
                                        end_time="2e-4", solver_extra="  damping: 1e6\n",

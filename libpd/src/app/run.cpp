@@ -61,20 +61,33 @@ private:
     }
   }
 
-  // What the run will write, roughly (VTU frames, checkpoint), against the free disk space.
-  void check_disk_space() {
-    if (!folder_) {
-      return;
-    }
+  // How big the run will be, from the scene alone: absurd settings (E = 1e300 gave Δt = 4.5e-151
+  // s; a small vtu_every gave 9,490 files in 30 s) are said before the run, and what it will
+  // write is checked against the free disk space.
+  void check_run_size() {
     const double dt = sim_->dt();
-    double steps = static_cast<double>(scene_.solver.max_steps);
-    if (scene_.solver.end_time && dt > 0) {
-      const double to_end = *scene_.solver.end_time / dt;
-      steps = steps > 0 ? std::min(steps, to_end) : to_end;
+    const double max_steps = static_cast<double>(scene_.solver.max_steps);
+    const double to_end =
+        scene_.solver.end_time && dt > 0 ? *scene_.solver.end_time / dt : max_steps;
+    const double steps = std::min(max_steps, to_end);
+    if (to_end > max_steps) {
+      warn(fmt::format("reaching end_time takes {:.3g} steps of Δt = {:.3g} s; the run stops at "
+                       "solver.max_steps = {:.3g}",
+                       to_end, dt, max_steps));
+    } else if (steps > many_steps) {
+      warn(fmt::format("the run takes {:.3g} steps of Δt = {:.3g} s", steps, dt));
     }
     double frames = 1;
-    if (options_.write_vtu && scene_.output.vtu && scene_.output.vtu_every > 0) {
+    if (folder_ && options_.write_vtu && scene_.output.vtu && scene_.output.vtu_every > 0) {
       frames += steps / static_cast<double>(scene_.output.vtu_every);
+      if (frames > many_files) {
+        warn(fmt::format("the run writes {:.3g} VTU files (output.vtu_every = {}); raise "
+                         "vtu_every for fewer",
+                         frames, scene_.output.vtu_every));
+      }
+    }
+    if (!folder_) {
+      return;
     }
     constexpr double vtu_bytes_per_particle = 200; // positions, displacement, damage as text
     const double bytes = frames * vtu_bytes_per_particle * static_cast<double>(model_.size()) +
@@ -85,6 +98,10 @@ private:
       warn(warning);
     }
   }
+
+  /// Above these a run's size is worth a warning before it starts.
+  static constexpr double many_steps = 1e8;
+  static constexpr double many_files = 1000;
 
   void warn(const std::string& warning) {
     out_.warnings.push_back(warning);
@@ -120,7 +137,7 @@ private:
     out_.bonds = model_.family.bond_count();
     output_.emplace(folder_ ? &*folder_ : nullptr, options_, scene_.output, probes_);
     checkpoints_.emplace(options_, sim_->integrator().checkpoint_refusal());
-    check_disk_space();
+    check_run_size();
     check_time_step();
   }
 

@@ -77,14 +77,9 @@ double lattice_points_in_box(const ModelDimension& d, const LatticeSpec& lattice
 double lattice_points_in_union(const ModelDimension& d, const LatticeSpec& lattice,
                                const Region& region) {
   const std::size_t k = region.boxes.size();
-  if (k <= 1) {
-    return sum_over_boxes(d, lattice, region);
-  }
-  // Coordinate compression: the box interval ends cut every axis into at most 2k − 1 slabs; a
-  // cell of slabs is either inside a box or not, so the union is the sum of the covered cells.
-  // Cost (2k)^dim · k, kept below 2·10^7 operations.
-  const double cost = std::pow(2.0 * static_cast<double>(k), d.dim) * static_cast<double>(k);
-  if (cost > 2e7) {
+  // One box, or so many that even dropping the nested ones (k² comparisons) is too slow: the sum
+  // over the boxes, which can only count too many.
+  if (k <= 1 || k > 5000) {
     return sum_over_boxes(d, lattice, region);
   }
   std::vector<std::array<Interval, 3>> boxes;
@@ -104,7 +99,36 @@ double lattice_points_in_union(const ModelDimension& d, const LatticeSpec& latti
       boxes.push_back(iv);
     }
   }
-  if (boxes.size() <= 1) {
+  // Boxes inside another box (copies included) add no points: drop them first, so that a union
+  // of many repeated or nested boxes costs what its distinct boxes cost (40 copies of one box
+  // were counted 40 times when the slab count below gave up).
+  const auto inside = [&](const std::array<Interval, 3>& a, const std::array<Interval, 3>& b) {
+    for (int ax = 0; ax < d.dim; ++ax) {
+      if (a[ax].first < b[ax].first || a[ax].last > b[ax].last) {
+        return false;
+      }
+    }
+    return true;
+  };
+  std::vector<std::array<Interval, 3>> kept;
+  for (std::size_t i = 0; i < boxes.size(); ++i) {
+    bool redundant = false;
+    for (std::size_t j = 0; j < boxes.size() && !redundant; ++j) {
+      // Of two equal boxes the later one is dropped; a strictly larger one always wins.
+      redundant = j != i && inside(boxes[i], boxes[j]) && (j < i || !inside(boxes[j], boxes[i]));
+    }
+    if (!redundant) {
+      kept.push_back(boxes[i]);
+    }
+  }
+  boxes = std::move(kept);
+  // Coordinate compression: the box interval ends cut every axis into at most 2k − 1 slabs; a
+  // cell of slabs is either inside a box or not, so the union is the sum of the covered cells.
+  // Cost (2k)^dim · k, kept below 2·10^7 operations; beyond it the sum over the boxes, which
+  // can only count too many, never too few.
+  const double cost =
+      std::pow(2.0 * static_cast<double>(boxes.size()), d.dim) * static_cast<double>(boxes.size());
+  if (cost > 2e7) {
     double sum = 0;
     for (const auto& iv : boxes) {
       double p = 1;
@@ -208,7 +232,7 @@ ResourceEstimate estimate_resources(const ModelSpec& spec, const SolverSpec& sol
     }
     constrained += std::min(members, n) * components;
   }
-  e.model_bytes = storage.bytes(n, directed, constrained);
+  e.model_bytes = storage.bytes(n, directed, constrained) + ModelStorage::fixed;
 
   // Integrator vectors beyond the run state (3N doubles each, per-dof flags of one byte).
   const double dof = 3 * n;
