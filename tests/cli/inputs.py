@@ -71,7 +71,9 @@ class Inputs(pdcli.TestCase):
         text = self.scene_text().replace("youngs_modulus: 200e9", "youngs_modulus: 1e300")
         text = text.replace("  damping: 1e6\n", "  damping: 1e6\n  max_steps: 100\n")
         r = self.pd("run", self.scene("e300.yaml", text=text), "-o", self.path("a"))
-        self.assertEqual(r.returncode, 0, r.stderr)
+        # At Δt = 6e-151 s the displacements are below the positions' resolution: round-off
+        # drives the run, and the energy watch may rightly call it unstable (exit 3).
+        self.assertIn(r.returncode, (0, 3), r.stderr)
         self.assertRegex(r.stderr, r"warning: reaching end_time takes \S+e\+14\d steps")
         text = self.scene_text().replace("vtu: false", "vtu: true").replace(
             "vtu_every: 100", "vtu_every: 1").replace("end_time: 2e-4", "end_time: 2e-3")

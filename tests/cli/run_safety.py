@@ -154,5 +154,28 @@ class RunSafety(pdcli.TestCase):
         self.assertTrue(any("stable limit" in w for w in warnings), warnings)
 
 
+    # Item 2 (second part): the shipped bar at 1.23× eq. 31 with a short end_time ran to
+    # end_time, exit 0, with 85,679 J of kinetic energy (the stable run: 0.0227 J): the
+    # displacements had not yet left the bounding box. Instability is found from the energy.
+    def test_instability_is_found_from_energy_not_left_as_end_time(self):
+        shipped = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..",
+                               "verification", "scenes", "bar-vibration.yaml")
+        with open(shipped, encoding="utf-8") as f:
+            text = f.read()
+        limit = float(re.search(r"stable dt \(eq. 31\)\s+(\S+)",
+                                self.pd("info", shipped).stdout).group(1))
+        for factor, code in ((1.23, 3), (0.9, 0)):
+            scene_text = re.sub(r"\n  dt: [^\n]*", f"\n  dt: {factor * limit:.6g}", text)
+            scene_text = re.sub(r"\n  end_time: [^\n]*", f"\n  end_time: {120 * limit:.6g}",
+                                scene_text)
+            out = self.path(f"out-{factor}")
+            r = self.pd("run", self.scene(f"bar-{factor}.yaml", text=scene_text), "-o", out)
+            self.assertEqual(r.returncode, code, f"{factor}× the limit: {r.stderr}")
+            if code == 3:
+                self.assertRegex(r.stderr, r"kinetic energy \S+ J is \S+× the energy put in")
+                self.assertIn("lower solver.dt", r.stderr)
+                self.assertEqual(read_json(os.path.join(out, "summary.json"))["status"],
+                                 "unstable")
+
 if __name__ == "__main__":
     pdcli.main()

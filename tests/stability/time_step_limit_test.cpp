@@ -125,7 +125,7 @@ void check_limit(const std::string& file, std::size_t steps) {
   const CliRun bad = run_cli(text, stem + "-1.05", 1.05 * st.measured, steps);
   EXPECT_EQ(bad.exit_code, 3) << bad.stdout_text << bad.stderr_text;
   const std::regex message(
-      R"(error: run became unstable at step (\d+) \(t = [^)]*\): .*Δt = ([0-9.e+-]+) s; the stable Δt of eq\. 31 is ([0-9.e+-]+) s)");
+      R"(error: run became unstable at step (\d+) \(t = [^)]*\): .*Δt = ([0-9.e+-]+) s is [0-9.e+-]+× the stable limit ([0-9.e+-]+) s \(eq\. 31 × 1\))");
   std::smatch m;
   const bool matched = std::regex_search(bad.stderr_text, m, message);
   EXPECT_TRUE(matched) << "stderr: " << bad.stderr_text;

@@ -3,11 +3,13 @@
 #include "libpd/core/binary_state.hpp"
 #include "libpd/kernel/linear_operator.hpp"
 #include "libpd/kernel/stable_time_step.hpp"
+#include "libpd/time/energy_watch.hpp"
 
 #include <chrono>
 #include <cmath>
 #include <fmt/format.h>
 #include <limits>
+#include <optional>
 
 namespace pd {
 
@@ -167,6 +169,24 @@ void Simulation::restore(CheckpointReader& r) {
   resumed_ = true;
 }
 
+std::string Simulation::unstable_message(const std::string& what) const {
+  // Δt is to blame only when it is above the limit; otherwise lowering it would not help and
+  // the message must not send the user there.
+  const double limit = dt_stable_ * integrator_->stability_scale();
+  const std::string cause =
+      dt_ > limit
+          ? fmt::format("Δt = {:.6g} s is {:.3g}× the stable limit {:.6g} s (eq. 31 × {:.3g}): "
+                        "lower solver.dt or solver.safety",
+                        dt_, dt_ / limit, limit, integrator_->stability_scale())
+          : fmt::format("Δt = {:.6g} s is within the stable limit {:.6g} s (eq. 31 × {:.3g}), so "
+                        "this is not a time-step instability: check the supports (a mirror clamp "
+                        "with model.mirror_coupling: copy can feed a growing mode), the "
+                        "corrections and the loads",
+                        dt_, limit, integrator_->stability_scale());
+  return fmt::format("run became unstable at step {} (t = {:.6g} s): {}. {}.", state_.step,
+                     state_.time, what, cause);
+}
+
 RunResult Simulation::run(const Observer& observer) {
   using clock = std::chrono::steady_clock;
   const auto start = clock::now();
@@ -184,6 +204,13 @@ RunResult Simulation::run(const Observer& observer) {
   }
   resumed_ = false;
   const std::size_t first_step = run_origin_;
+  // ADR's velocities are fictitious (its masses are chosen for convergence), so its kinetic
+  // energy bounds nothing.
+  std::optional<EnergyWatch> watch;
+  if (solver_.energy_check && solver_.integrator != IntegratorKind::adr) {
+    watch.emplace(model_, ramp_, massless_);
+    watch->start(state_, kinetic_energy(), strain_energy());
+  }
   for (;;) {
     if (solver_.end_time && state_.step >= end_steps) {
       r.status = RunStatus::end_time;
@@ -197,15 +224,18 @@ RunResult Simulation::run(const Observer& observer) {
     if (!(rep.max_displacement_squared <= blowup_squared_)) {
       r.status = RunStatus::unstable;
       const bool finite = std::isfinite(rep.max_displacement_squared);
-      r.message = fmt::format(
-          "run became unstable at step {} (t = {:.6g} s): {}. Δt = {:.6g} s; the stable Δt of "
-          "eq. 31 is {:.6g} s (Δt is {:.3g}× that). Lower solver.dt or solver.safety.",
-          state_.step, state_.time,
+      r.message = unstable_message(
           finite ? fmt::format("a displacement reached {:.3g} m, beyond the blow-up limit {:.3g} m",
                                std::sqrt(rep.max_displacement_squared), std::sqrt(blowup_squared_))
-                 : std::string("non-finite positions"),
-          dt_, dt_stable_, dt_ / dt_stable_);
+                 : std::string("non-finite positions"));
       break;
+    }
+    if (watch && state_.step % EnergyWatch::every == 0) {
+      if (const std::string grew = watch->check(state_); !grew.empty()) {
+        r.status = RunStatus::unstable;
+        r.message = unstable_message(grew);
+        break;
+      }
     }
     if (solver_.steady.enabled && state_.step % solver_.steady.check_every == 0 &&
         state_.time >= solver_.ramp_time) {

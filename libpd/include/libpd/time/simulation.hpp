@@ -39,6 +39,9 @@ struct SolverSpec {
   std::size_t max_steps = 100'000'000;
   /// A displacement larger than this means the run has blown up. 0: the bounding-box diagonal.
   double blowup_displacement = 0;
+  /// Stop as unstable when the kinetic energy outgrows the energy put in (time/energy_watch.hpp).
+  /// Off only where a caller measures growth itself (pd stability's bounded runs).
+  bool energy_check = true;
 };
 
 /// Initial displacement u0 = H (X − about) and uniform initial velocity.
@@ -111,6 +114,9 @@ public:
   void restore(CheckpointReader& r);
 
 private:
+  /// "run became unstable at step …: WHAT. " and whether Δt is to blame.
+  std::string unstable_message(const std::string& what) const;
+
   Model& model_;
   SolverSpec solver_;
   State state_;
