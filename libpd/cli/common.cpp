@@ -118,20 +118,6 @@ double OtherCpuMeter::cores() const {
   return wall_seconds_ > 0 ? other_seconds_ / wall_seconds_ : 0.0;
 }
 
-std::string shorten_words(std::string_view message, std::size_t max_word_bytes) {
-  std::string out;
-  std::size_t i = 0;
-  while (i < message.size()) {
-    const std::size_t end = std::min(message.find_first_of(" \n", i), message.size());
-    out += printable(message.substr(i, end - i), max_word_bytes);
-    if (end < message.size()) {
-      out += message[end];
-    }
-    i = end + 1;
-  }
-  return out;
-}
-
 Scene load_or_explain(const std::string& path) {
   Scene scene = load_scene(path);
   for (const auto& w : scene.warnings) {

@@ -69,10 +69,6 @@ private:
   double other_seconds_ = 0, wall_seconds_ = 0;
 };
 
-/// A message with each word (between spaces and newlines) made printable and cut to
-/// `max_word_bytes` (pd::printable): for messages that quote what the user typed.
-std::string shorten_words(std::string_view message, std::size_t max_word_bytes = 60);
-
 /// Load a scene and print its warnings on stderr.
 Scene load_or_explain(const std::string& path);
 

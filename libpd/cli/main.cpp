@@ -68,7 +68,7 @@ int main(int argc, char** argv) {
       return app.exit(e);
     }
     fmt::print(stderr, "{}\nRun with --help for more information.\n",
-               pd::cli::shorten_words(e.what()));
+               pd::printable_words(e.what()));
     return 1;
   }
   try {
@@ -78,10 +78,10 @@ int main(int argc, char** argv) {
       }
     }
   } catch (const pd::SceneError& e) {
-    fmt::print(stderr, "{}\n", pd::cli::shorten_words(e.what(), long_word_bytes));
+    fmt::print(stderr, "{}\n", pd::printable_words(e.what(), long_word_bytes));
     return 1;
   } catch (const std::exception& e) {
-    fmt::print(stderr, "error: {}\n", pd::cli::shorten_words(e.what(), long_word_bytes));
+    fmt::print(stderr, "error: {}\n", pd::printable_words(e.what(), long_word_bytes));
     return 1;
   }
   return 0;

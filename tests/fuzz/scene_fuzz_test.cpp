@@ -16,6 +16,7 @@
 // PD_FUZZ_ONLY (run one case and print its text), PD_FUZZ_CASE_SECONDS (watchdog, default 120).
 // PD_MEMORY_LIMIT defaults to 1G here so the guard refuses the same cases on every machine.
 #include "libpd/app/run.hpp"
+#include "libpd/core/text.hpp"
 #include "libpd/io/resources.hpp"
 #include "libpd/io/scene.hpp"
 
@@ -181,6 +182,12 @@ private:
         "1e-12",
         "3.4e38",
         "2.2250738585072014e-308",
+        // Issue 18: huge scalars are not echoed whole, bytes that are not text are escaped.
+        std::string(100000, '9'),
+        std::string(20000, 'x') + "\xff",
+        "\xff\xfe not utf-8",
+        "a\x01\x1b[2Jb",
+        "caf\xc3\xa9",
     };
     switch (pick(6)) {
     case 0: {
@@ -285,7 +292,8 @@ private:
       }
       Slot s = scalars.empty() ? choose(slots) : choose(scalars);
       const YAML::Node v = weird_value(s.node);
-      log.push_back(fmt::format("set {} = {}", s.path, v.IsScalar() ? v.Scalar() : "<node>"));
+      log.push_back(
+          fmt::format("set {} = {}", s.path, v.IsScalar() ? pd::printable(v.Scalar()) : "<node>"));
       assign(s, v);
       break;
     }
@@ -305,8 +313,8 @@ private:
       break;
     }
     case 5: { // horizon factor: at the edge, large or absurd
-      static const std::vector<std::string> m{"1",  "1.0000001", "0.999", "1.5", "10",
-                                              "41", "100",       "1e4",   "1e8", "1e300"};
+      static const std::vector<std::string> m{"1",   "1.0000001", "0.999", "1.5", "10",   "41",
+                                              "100", "1e4",       "1e8",   "1e9", "1e19", "1e300"};
       const std::string v = choose(m);
       log.push_back("horizon_factor = " + v);
       root["lattice"]["horizon_factor"] = v;
@@ -542,6 +550,10 @@ std::string run_case(const std::string& name, const std::string& text, Tally& ta
     const std::string message = e.what();
     if (!well_formed(message, name)) {
       return "SceneError without FILE:LINE:COL, message or hint:\n" + message;
+    }
+    if (message.size() > 4000) {
+      return fmt::format("a SceneError of {} bytes echoes too much:\n{}", message.size(),
+                         message.substr(0, 300));
     }
     if (message.find("internal error") != std::string::npos) {
       return "the parser hit an internal error:\n" + message;

@@ -1,6 +1,7 @@
 // Echoing user text safely.
 #include "libpd/core/text.hpp"
 
+#include <algorithm>
 #include <fmt/format.h>
 
 namespace pd {
@@ -68,6 +69,20 @@ std::string printable(std::string_view s, std::size_t max_bytes) {
   }
   if (i < s.size()) {
     out += fmt::format("… ({} bytes)", s.size());
+  }
+  return out;
+}
+
+std::string printable_words(std::string_view message, std::size_t max_word_bytes) {
+  std::string out;
+  std::size_t i = 0;
+  while (i < message.size()) {
+    const std::size_t end = std::min(message.find_first_of(" \n", i), message.size());
+    out += printable(message.substr(i, end - i), max_word_bytes);
+    if (end < message.size()) {
+      out += message[end];
+    }
+    i = end + 1;
   }
   return out;
 }

@@ -20,4 +20,8 @@ std::string valid_utf8(std::string_view s);
 /// `max_bytes` cut, ending in "… (N bytes)" with the full size.
 std::string printable(std::string_view s, std::size_t max_bytes = 80);
 
+/// `message` with each word (between spaces and newlines) made printable and cut to
+/// `max_word_bytes`: for messages that quote what the user wrote.
+std::string printable_words(std::string_view message, std::size_t max_word_bytes = 60);
+
 } // namespace pd

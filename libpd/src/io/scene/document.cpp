@@ -2,6 +2,7 @@
 // section (sections.hpp); every failure, including malformed YAML, becomes a SceneError with the
 // file, line and column and a hint.
 #include "libpd/core/file_input.hpp"
+#include "libpd/core/text.hpp"
 #include "sections.hpp"
 
 #include <cerrno>
@@ -46,10 +47,17 @@ std::string format_error(const std::string& file, SourceMark mark, const std::st
 
 } // namespace
 
+/// Longest word of a scene error message: any real path or key fits.
+constexpr std::size_t max_echoed_word = 400;
+
 SceneError::SceneError(std::string file, SourceMark mark, const std::string& what,
                        const std::string& hint)
-    : std::runtime_error(format_error(file, mark, what, hint)), file_(std::move(file)),
-      mark_(mark) {}
+    // A scene's values may be megabytes long or hold any bytes: each word of the message is
+    // cut and escaped, once, here.
+    : std::runtime_error(format_error(printable(file, max_echoed_word), mark,
+                                      printable_words(what, max_echoed_word),
+                                      printable_words(hint, max_echoed_word))),
+      file_(std::move(file)), mark_(mark) {}
 
 namespace scene {
 
