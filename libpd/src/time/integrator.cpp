@@ -95,6 +95,8 @@ std::unique_ptr<Integrator> make_integrator(const IntegratorSettings& s, Model& 
     return make_adr_integrator(s, model, forces);
   case IntegratorKind::arkode:
     return make_arkode_integrator(s, model, forces);
+  case IntegratorKind::static_solve:
+    return make_static_solver(s, model, forces);
   }
   throw std::logic_error("unknown integrator");
 }

@@ -207,7 +207,8 @@ RunResult Simulation::run(const Observer& observer) {
   // ADR's velocities are fictitious (its masses are chosen for convergence), so its kinetic
   // energy bounds nothing.
   std::optional<EnergyWatch> watch;
-  if (solver_.energy_check && solver_.integrator != IntegratorKind::adr) {
+  if (solver_.energy_check && solver_.integrator != IntegratorKind::adr &&
+      solver_.integrator != IntegratorKind::static_solve) {
     watch.emplace(model_, ramp_, massless_);
     watch->start(state_, kinetic_energy(), strain_energy());
   }
@@ -228,6 +229,11 @@ RunResult Simulation::run(const Observer& observer) {
           finite ? fmt::format("a displacement reached {:.3g} m, beyond the blow-up limit {:.3g} m",
                                std::sqrt(rep.max_displacement_squared), std::sqrt(blowup_squared_))
                  : std::string("non-finite positions"));
+      break;
+    }
+    if (integrator_->finished()) {
+      r.status = RunStatus::converged;
+      r.message = integrator_->report();
       break;
     }
     if (watch && state_.step % EnergyWatch::every == 0) {

@@ -28,16 +28,18 @@
 
 namespace pd {
 
-enum class IntegratorKind { damped_euler, euler_cromer, verlet, adr, arkode };
+enum class IntegratorKind { damped_euler, euler_cromer, verlet, adr, arkode, static_solve };
 
 template <>
 struct EnumName<IntegratorKind> {
-  static constexpr NameTable<IntegratorKind, 5> table{{
+  static constexpr NameTable<IntegratorKind, 6> table{{
       {"damped-euler", IntegratorKind::damped_euler, "explicit Euler with kinematic damping"},
       {"euler-cromer", IntegratorKind::euler_cromer, "symplectic Euler, no damping"},
       {"verlet", IntegratorKind::verlet, "velocity Verlet, no damping"},
       {"adr", IntegratorKind::adr, "adaptive dynamic relaxation (Kilic & Madenci 2010)"},
       {"arkode", IntegratorKind::arkode, "SUNDIALS ARKode ERKStep with a Butcher table"},
+      {"static", IntegratorKind::static_solve,
+       "one sparse solve of the linearised equilibrium, refined by Newton (elastic only)"},
   }};
 };
 
@@ -158,6 +160,10 @@ public:
   void restore(CheckpointReader& r);
   /// Empty if a checkpoint can continue this integrator bitwise; otherwise the reason it cannot.
   virtual std::string checkpoint_refusal() const { return {}; }
+  /// True once the method has its answer and further steps would change nothing (static).
+  virtual bool finished() const { return false; }
+  /// What the method did, for the run's summary (empty: nothing to say).
+  virtual std::string report() const { return {}; }
 
 protected:
   virtual void save_state(CheckpointWriter&) const {}
@@ -190,6 +196,8 @@ std::unique_ptr<Integrator> make_adr_integrator(const IntegratorSettings& settin
                                                 ForceEvaluator& forces);
 std::unique_ptr<Integrator> make_arkode_integrator(const IntegratorSettings& settings, Model& model,
                                                    ForceEvaluator& forces);
+std::unique_ptr<Integrator> make_static_solver(const IntegratorSettings& settings, Model& model,
+                                               ForceEvaluator& forces);
 
 /// ADR's fictitious density λ per degree of freedom (3N): ¼ Δt² times the Gershgorin row sum of
 /// the linearised bond operator, Δt = 1 (time/adr.cpp).
