@@ -107,14 +107,12 @@ public:
   std::string report() const override { return report_; }
 
 private:
-  void solve(State& st) {
-    using clock = std::chrono::steady_clock;
-    const auto t0 = clock::now();
-    const DofMap d = map_dofs(model_);
+  /// K (free × free, per unit volume) and the right-hand side b_ext − K_fp u_p.
+  Eigen::SparseMatrix<double> assemble(const DofMap& d, Eigen::VectorXd& rhs) const {
     const auto n = static_cast<Eigen::Index>(d.free_dofs.size());
     const bool fold_rows = consistent_mirror_coupling(model_);
     std::vector<Eigen::Triplet<double>> triplets;
-    Eigen::VectorXd rhs = Eigen::VectorXd::Zero(n);
+    rhs = Eigen::VectorXd::Zero(n);
     const std::vector<double>& ext = model_.external_force_density;
 
     // Row of the equation of global dof g: its own if free; a consistent mirror dependant's
@@ -167,6 +165,17 @@ private:
     Eigen::SparseMatrix<double> K(n, n);
     K.setFromTriplets(triplets.begin(), triplets.end());
     K.makeCompressed();
+    return K;
+  }
+
+  void solve(State& st) {
+    using clock = std::chrono::steady_clock;
+    const auto t0 = clock::now();
+    const DofMap d = map_dofs(model_);
+    const auto n = static_cast<Eigen::Index>(d.free_dofs.size());
+    const std::vector<double>& ext = model_.external_force_density;
+    Eigen::VectorXd rhs;
+    const Eigen::SparseMatrix<double> K = assemble(d, rhs);
     const auto t1 = clock::now();
     const Eigen::SparseMatrix<double> Kt = K.transpose();
     const double asym = (K - Kt).norm() / std::max(K.norm(), 1e-300);
