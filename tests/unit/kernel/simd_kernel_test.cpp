@@ -90,7 +90,9 @@ std::vector<double> deformed(const pd::Model& model, double amplitude, double ju
 const std::vector<double> history{1.0, 0.3, -0.8, 1.2};
 
 bool bitwise_equal(const std::vector<double>& a, const std::vector<double>& b) {
-  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(double)) == 0;
+  // memcmp of two empty vectors would pass it null pointers (undefined behaviour, UBSan).
+  return a.size() == b.size() &&
+         (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(double)) == 0);
 }
 
 /// Forces after each step of `history` and the final bond state, on a fresh model.
