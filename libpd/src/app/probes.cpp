@@ -19,7 +19,7 @@ std::vector<ResolvedProbe> resolve_probes(const std::vector<ProbeSpec>& probes,
       // Nearest particle; ties go to the lowest index so the choice is reproducible.
       double best = std::numeric_limits<double>::max();
       std::uint32_t arg = 0;
-      for (std::size_t i = 0; i < model.size(); ++i) {
+      for (std::size_t i = 0; i < model.body_particle_count(); ++i) {
         double d2 = 0;
         for (int c = 0; c < 3; ++c) {
           const double d = model.particles.position[i][c] - p.point[c];
@@ -32,7 +32,7 @@ std::vector<ResolvedProbe> resolve_probes(const std::vector<ProbeSpec>& probes,
       }
       r.particles.push_back(arg);
     } else {
-      for (std::size_t i = 0; i < model.size(); ++i) {
+      for (std::size_t i = 0; i < model.body_particle_count(); ++i) {
         if (p.region.contains(model.particles.position[i], dim, tol)) {
           r.particles.push_back(static_cast<std::uint32_t>(i));
         }

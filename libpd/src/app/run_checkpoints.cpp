@@ -37,6 +37,11 @@ std::uint64_t model_hash(const Model& m) {
     h.add_value(c.mirror_of);
     h.add_value(c.mirror_sign);
   }
+  h.add_value(static_cast<std::uint64_t>(m.ghost_count));
+  h.add_vector(m.extrapolated.particle);
+  h.add_vector(m.extrapolated.offsets);
+  h.add_vector(m.extrapolated.source);
+  h.add_vector(m.extrapolated.coefficient);
   h.add_vector(m.external_force_density);
   return h.value();
 }

@@ -621,6 +621,7 @@ std::vector<double> bond_correction_factors(const CorrectionSpec& spec,
   std::vector<double> factor = volume_correction_factors(spec, particles, family);
   switch (spec.surface_correction) {
   case SurfaceCorrection::none:
+  case SurfaceCorrection::ghost: // ghost particles give every particle its horizon (model.cpp)
     break;
   case SurfaceCorrection::volume: {
     // λ_ij = 2V0/(V_i + V_j) with V_i the (volume-corrected) family volume of particle i and V0

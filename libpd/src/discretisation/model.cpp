@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <map>
 #include <set>
 #include <stdexcept>
@@ -91,9 +92,9 @@ std::vector<MaterialConstants> material_constants(const ModelSpec& spec) {
 }
 
 std::vector<std::uint32_t> particles_in(const ParticleSet& ps, const Region& region, int dim,
-                                        double tol) {
+                                        double tol, std::size_t count = SIZE_MAX) {
   std::vector<std::uint32_t> out;
-  for (std::size_t i = 0; i < ps.size(); ++i) {
+  for (std::size_t i = 0; i < std::min(count, ps.size()); ++i) {
     if (region.contains(ps.position[i], dim, tol)) {
       out.push_back(static_cast<std::uint32_t>(i));
     }
@@ -103,14 +104,19 @@ std::vector<std::uint32_t> particles_in(const ParticleSet& ps, const Region& reg
 
 } // namespace
 
-std::vector<Constraint> support_constraints(const ModelSpec& spec, const ParticleSet& particles) {
+std::vector<Constraint> support_constraints(const ModelSpec& spec, const ParticleSet& particles,
+                                            std::size_t body_particles) {
   const double tol = region_tolerance(spec);
   std::vector<OwnedConstraint> constraints;
   for (std::size_t s = 0; s < spec.supports.size(); ++s) {
     const SupportSpec& sup = spec.supports[s];
-    const auto members = particles_in(particles, sup.region, spec.dimension.dim, tol);
+    const auto members =
+        particles_in(particles, sup.region, spec.dimension.dim, tol, body_particles);
     if (members.empty()) {
       throw SupportError(s, "support '" + sup.name + "' holds no particle");
+    }
+    if (sup.mirrors() && spec.mirror_coupling == MirrorCoupling::quadratic) {
+      continue; // its particles are extrapolated from the body (extrapolated_particles)
     }
     if (sup.mirrors()) {
       add_mirror_constraints(particles, spec.lattice.spacing, s, sup, members, constraints);
@@ -160,11 +166,38 @@ std::vector<Constraint> support_constraints(const ModelSpec& spec, const Particl
   return out;
 }
 
+std::vector<ClampPlane> clamp_planes(const ModelSpec& spec) {
+  std::vector<ClampPlane> planes;
+  for (const SupportSpec& sup : spec.supports) {
+    for (int a = 0; a < 3; ++a) {
+      const auto au = static_cast<std::size_t>(a);
+      if (!sup.mirror[au]) {
+        continue;
+      }
+      double lo = std::numeric_limits<double>::infinity();
+      double hi = -lo;
+      for (const Box& b : sup.region.boxes) {
+        lo = std::min(lo, b.lo[au]);
+        hi = std::max(hi, b.hi[au]);
+      }
+      const double centre = 0.5 * (lo + hi);
+      const ClampPlane plane{a, sup.mirror_at[au], centre < sup.mirror_at[au] ? -1.0 : 1.0};
+      const bool known = std::any_of(planes.begin(), planes.end(), [&](const ClampPlane& p) {
+        return p.axis == plane.axis && p.at == plane.at && p.side == plane.side;
+      });
+      if (!known) {
+        planes.push_back(plane);
+      }
+    }
+  }
+  return planes;
+}
+
 EffectSet kernel_effects(const ModelSpec& spec, std::size_t materials_used) {
   EffectSet effects = spec.effects;
   // Consistently coupled mirror supports weight their bonds (mirror_constraints.hpp), so they need
-  // the per-bond field.
-  const bool weighted_mirrors = spec.mirror_coupling == MirrorCoupling::consistent &&
+  // the per-bond field; so do extrapolated clamps (ghost_layers.hpp).
+  const bool weighted_mirrors = spec.mirror_coupling != MirrorCoupling::copy &&
                                 std::any_of(spec.supports.begin(), spec.supports.end(),
                                             [](const SupportSpec& s) { return s.mirrors(); });
   effects.per_bond_field = materials_used > 1 || spec.corrections().corrects() ||
@@ -202,6 +235,121 @@ std::size_t Model::memory_bytes() const {
 
 namespace {
 
+/// Ghost particles at the lattice sites outside the bodies within the horizon (ghost_layers.hpp),
+/// appended after the body particles. Their material is set once the bond family is known.
+void append_ghost_sites(const ModelSpec& spec, ParticleSet& particles) {
+  const auto sites =
+      ghost_sites(spec.dimension.dim, spec.lattice, spec.horizon_rule, particles.position);
+  const double volume = cell_volume(spec.dimension, spec.lattice.spacing);
+  for (const Vec3& p : sites) {
+    particles.position.push_back(p);
+    particles.volume.push_back(volume);
+    particles.material.push_back(particles.material.front());
+    particles.body.push_back(particles.body.front());
+  }
+}
+
+/// A ghost continues the body next to it: it takes the material (and body) of the nearest body
+/// particle in its family (lowest index among equals), so a bond into it has that material's
+/// constants.
+void take_material_of_nearest_body_particle(const BondFamily& family, std::size_t body_count,
+                                            ParticleSet& particles) {
+  for (std::size_t g = body_count; g < particles.size(); ++g) {
+    double best = std::numeric_limits<double>::infinity();
+    for (std::size_t k = family.offsets[g]; k < family.offsets[g + 1]; ++k) {
+      const std::size_t j = family.neighbour[k];
+      const double r = 1.0 / family.inverse_length[k];
+      if (j < body_count && r < best * (1 - 1e-12)) {
+        best = r;
+        particles.material[g] = particles.material[j];
+        particles.body[g] = particles.body[j];
+      }
+    }
+  }
+}
+
+/// The extrapolated dependants (ghost_layers.hpp): the ghosts, and the particles of mirror
+/// supports under `quadratic` coupling. Particles held by any constraint are never sources.
+ExtrapolatedParticles extrapolated_particles(const ModelSpec& spec, const ParticleSet& particles,
+                                             std::size_t body_count, const BondFamily& family,
+                                             const std::vector<Constraint>& constraints) {
+  const std::size_t n = particles.size();
+  std::vector<std::uint8_t> dependent(n, 0);
+  std::vector<std::uint8_t> mirror_image(n, 0); // set by a mirror constraint, not fitted
+  for (const Constraint& c : constraints) {
+    if (c.mirror_of != Constraint::no_mirror) {
+      dependent[c.particle] = 1;
+      mirror_image[c.particle] = 1;
+    }
+  }
+  for (std::size_t g = body_count; g < n; ++g) {
+    dependent[g] = 1;
+  }
+  if (spec.mirror_coupling == MirrorCoupling::quadratic) {
+    for (const SupportSpec& sup : spec.supports) {
+      if (sup.mirrors()) {
+        for (std::uint32_t i : particles_in(particles, sup.region, spec.dimension.dim,
+                                            region_tolerance(spec), body_count)) {
+          dependent[i] = 1;
+        }
+      }
+    }
+  }
+  std::vector<std::uint32_t> fitted;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (dependent[i] && !mirror_image[i]) {
+      fitted.push_back(static_cast<std::uint32_t>(i));
+    }
+  }
+  if (fitted.empty()) {
+    return {};
+  }
+  return extrapolation_ties(spec.dimension.dim, spec.lattice.spacing, particles.position, family,
+                            dependent, fitted, clamp_planes(spec));
+}
+
+/// The loads as force densities [N/m³] per dof (empty without loads): a resultant is shared in
+/// proportion to particle volume among the body particles (ghosts carry none).
+std::vector<double> load_force_densities(const ModelSpec& spec, const ParticleSet& particles,
+                                         std::size_t body_count) {
+  const double tol = region_tolerance(spec);
+  const int dim = spec.dimension.dim;
+  std::vector<double> force_density;
+  // Loads become force densities [N/m³]; a resultant is shared in proportion to particle volume.
+  if (!spec.loads.empty()) {
+    force_density.assign(3 * particles.size(), 0.0);
+  }
+  for (const LoadSpec& load : spec.loads) {
+    const auto members = particles_in(particles, load.load.region, dim, tol, body_count);
+    if (members.empty()) {
+      throw std::runtime_error("load '" + load.name + "' acts on no particle");
+    }
+    double total_volume = 0;
+    for (std::uint32_t i : members) {
+      total_volume += particles.volume[i];
+    }
+    for (int c = 0; c < 3; ++c) {
+      double density = 0;
+      switch (load.load.kind) {
+      case BoxRegionLoad::Kind::body:
+        density = load.load.value[c];
+        break;
+      case BoxRegionLoad::Kind::total:
+        density = load.load.value[c] / total_volume;
+        break;
+      case BoxRegionLoad::Kind::per_area:
+      case BoxRegionLoad::Kind::per_length:
+        density = load.load.value[c] * load.load.measure / total_volume;
+        break;
+      }
+      for (std::uint32_t i : members) {
+        force_density[3 * i + c] += density;
+      }
+    }
+  }
+  return force_density;
+}
+
 void require_material_and_body(const ModelSpec& spec) {
   if (spec.materials.empty() || spec.bodies.empty()) {
     throw std::runtime_error("a model needs at least one material and one body");
@@ -222,12 +370,19 @@ Model build_model(const ModelSpec& spec, ParticleSet particles) {
   const int dim = spec.dimension.dim;
   const double delta = spec.lattice.horizon();
   m.particles = std::move(particles);
-  const std::size_t n = m.particles.size();
-  if (n == 0) {
+  const std::size_t body_count = m.particles.size();
+  if (body_count == 0) {
     throw std::runtime_error("the bodies contain no lattice particle");
   }
+  if (spec.surface_correction == SurfaceCorrection::ghost) {
+    append_ghost_sites(spec, m.particles);
+  }
+  m.ghost_count = m.particles.size() - body_count;
+  const std::size_t n = m.particles.size();
   m.family = build_bond_family(m.particles.position, dim, delta, spec.horizon_rule);
-  m.constraints = support_constraints(spec, m.particles);
+  take_material_of_nearest_body_particle(m.family, body_count, m.particles);
+  m.constraints = support_constraints(spec, m.particles, body_count);
+  m.extrapolated = extrapolated_particles(spec, m.particles, body_count, m.family, m.constraints);
 
   const std::set<std::uint16_t> used(m.particles.material.begin(), m.particles.material.end());
   m.effects = kernel_effects(spec, used.size());
@@ -254,10 +409,16 @@ Model build_model(const ModelSpec& spec, ParticleSet particles) {
     }
     std::vector<double> correction =
         bond_correction_factors(spec.corrections(), m.particles, m.family);
-    if (consistent_mirror_coupling(spec.mirror_coupling, m.constraints)) {
-      // The energy W_c of mirror_constraints.hpp: support bonds count ½, image–image bonds 0.
-      const auto weight = mirror_bond_weights(
-          m.family, mirror_dependent_particles(m.particles.size(), m.constraints));
+    if (consistent_mirror_coupling(spec.mirror_coupling, m.constraints) ||
+        !m.extrapolated.empty()) {
+      // The energy W_c of mirror_constraints.hpp and ghost_layers.hpp: bonds between a body
+      // particle and a dependant count ½, bonds between two dependants 0.
+      std::vector<std::uint8_t> dependent =
+          consistent_mirror_coupling(spec.mirror_coupling, m.constraints)
+              ? mirror_dependent_particles(n, m.constraints)
+              : std::vector<std::uint8_t>(n, 0);
+      mark_dependants(m.extrapolated, dependent);
+      const auto weight = mirror_bond_weights(m.family, dependent);
       for (std::size_t k = 0; k < correction.size(); ++k) {
         correction[k] *= weight[k];
       }
@@ -287,40 +448,7 @@ Model build_model(const ModelSpec& spec, ParticleSet particles) {
     m.state.plastic_stretch.assign(m.family.directed_bond_count(), 0.0);
   }
 
-  const double tol = region_tolerance(spec);
-
-  // Loads become force densities [N/m³]; a resultant is shared in proportion to particle volume.
-  if (!spec.loads.empty()) {
-    m.external_force_density.assign(3 * n, 0.0);
-  }
-  for (const LoadSpec& load : spec.loads) {
-    const auto members = particles_in(m.particles, load.load.region, dim, tol);
-    if (members.empty()) {
-      throw std::runtime_error("load '" + load.name + "' acts on no particle");
-    }
-    double total_volume = 0;
-    for (std::uint32_t i : members) {
-      total_volume += m.particles.volume[i];
-    }
-    for (int c = 0; c < 3; ++c) {
-      double density = 0;
-      switch (load.load.kind) {
-      case BoxRegionLoad::Kind::body:
-        density = load.load.value[c];
-        break;
-      case BoxRegionLoad::Kind::total:
-        density = load.load.value[c] / total_volume;
-        break;
-      case BoxRegionLoad::Kind::per_area:
-      case BoxRegionLoad::Kind::per_length:
-        density = load.load.value[c] * load.load.measure / total_volume;
-        break;
-      }
-      for (std::uint32_t i : members) {
-        m.external_force_density[3 * i + c] += density;
-      }
-    }
-  }
+  m.external_force_density = load_force_densities(spec, m.particles, body_count);
   return m;
 }
 

@@ -11,7 +11,7 @@ namespace pd {
 void write_vtu(const std::filesystem::path& path, const Simulation& sim) {
   const Model& m = sim.model();
   const State& st = sim.state();
-  const std::size_t n = m.size();
+  const std::size_t n = m.body_particle_count(); // ghosts are not part of the body
   auto check = [&](double v, const char* what) {
     if (!std::isfinite(v)) {
       throw std::runtime_error(

@@ -32,29 +32,58 @@ bool consistent_mirror_coupling(const Model& model) {
   return consistent_mirror_coupling(model.spec.mirror_coupling, model.constraints);
 }
 
-std::vector<std::uint8_t> massless_mirror_particles(const Model& model) {
-  if (!consistent_mirror_coupling(model)) {
-    return std::vector<std::uint8_t>(model.size(), 0);
+bool folds_dependants(const Model& model) {
+  return consistent_mirror_coupling(model) || !model.extrapolated.empty();
+}
+
+std::vector<std::uint8_t> massless_dependants(const Model& model) {
+  std::vector<std::uint8_t> massless =
+      consistent_mirror_coupling(model)
+          ? mirror_dependent_particles(model.size(), model.constraints)
+          : std::vector<std::uint8_t>(model.size(), 0);
+  mark_dependants(model.extrapolated, massless);
+  return massless;
+}
+
+std::vector<double> constraint_row_norms(const Model& model) {
+  std::vector<double> norm(model.size(), 1.0);
+  const ExtrapolatedParticles& e = model.extrapolated;
+  for (std::size_t d = 0; d < e.size(); ++d) {
+    double sum = 0;
+    for (std::size_t t = e.offsets[d]; t < e.offsets[d + 1]; ++t) {
+      sum += std::abs(e.coefficient[t]);
+    }
+    norm[e.particle[d]] = sum;
   }
-  return mirror_dependent_particles(model.size(), model.constraints);
+  return norm;
 }
 
 namespace {
 
 template <class Sign>
 void fold(const Model& model, double* v, Sign sign) {
-  if (model.spec.mirror_coupling != MirrorCoupling::consistent) {
-    return; // copy coupling: the dependants' forces are reactions and go nowhere
-  }
   const auto& volume = model.particles.volume;
-  // Sources are never constrained themselves (support_constraints), so one pass is the whole
-  // transpose and its order does not matter.
-  for (const Constraint& c : model.constraints) {
-    if (c.mirror_of == Constraint::no_mirror) {
-      continue;
+  // Sources are never dependants themselves (support_constraints, extrapolated_particles), so one
+  // pass is the whole transpose and its order does not matter.
+  if (model.spec.mirror_coupling == MirrorCoupling::consistent) {
+    for (const Constraint& c : model.constraints) { // copy coupling: reactions that go nowhere
+      if (c.mirror_of == Constraint::no_mirror) {
+        continue;
+      }
+      v[3 * c.mirror_of + c.component] += sign(c.mirror_sign) * v[3 * c.particle + c.component] *
+                                          volume[c.particle] / volume[c.mirror_of];
     }
-    v[3 * c.mirror_of + c.component] += sign(c.mirror_sign) * v[3 * c.particle + c.component] *
-                                        volume[c.particle] / volume[c.mirror_of];
+  }
+  const ExtrapolatedParticles& e = model.extrapolated;
+  for (std::size_t d = 0; d < e.size(); ++d) {
+    const std::size_t p = e.particle[d];
+    for (std::size_t t = e.offsets[d]; t < e.offsets[d + 1]; ++t) {
+      const std::size_t s = e.source[t];
+      const double a = sign(e.coefficient[t]) * volume[p] / volume[s];
+      for (std::size_t c = 0; c < 3; ++c) {
+        v[3 * s + c] += a * v[3 * p + c];
+      }
+    }
   }
 }
 
@@ -68,12 +97,29 @@ void fold_mirror_bounds(const Model& model, double* bound) {
   fold(model, bound, [](double s) { return std::abs(s); });
 }
 
+void set_extrapolated(const Model& model, double* v) {
+  const ExtrapolatedParticles& e = model.extrapolated;
+  for (std::size_t d = 0; d < e.size(); ++d) {
+    const std::size_t p = e.particle[d];
+    double acc[3] = {0, 0, 0};
+    for (std::size_t t = e.offsets[d]; t < e.offsets[d + 1]; ++t) {
+      for (std::size_t c = 0; c < 3; ++c) {
+        acc[c] += e.coefficient[t] * v[3 * e.source[t] + c];
+      }
+    }
+    for (std::size_t c = 0; c < 3; ++c) {
+      v[3 * p + c] = acc[c];
+    }
+  }
+}
+
 void apply_constrained_operator(const Model& m, double* u, double* ku) {
   for (const Constraint& c : m.constraints) {
     if (c.mirror_of != Constraint::no_mirror) {
       u[3 * c.particle + c.component] = c.mirror_sign * u[3 * c.mirror_of + c.component];
     }
   }
+  set_extrapolated(m, u);
   apply_linearised_operator(m, u, ku);
   fold_mirror_forces(m, ku);
 }
@@ -103,7 +149,7 @@ private:
 
 std::unique_ptr<ForceEvaluator> make_constrained_force_evaluator(Model& model) {
   auto inner = make_force_evaluator(model);
-  if (!consistent_mirror_coupling(model)) {
+  if (!folds_dependants(model)) {
     return inner;
   }
   return std::make_unique<ConstrainedForces>(model, std::move(inner));

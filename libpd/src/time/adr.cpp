@@ -40,21 +40,24 @@ namespace pd {
 std::vector<double> adr_fictitious_density(const Model& m) {
   const std::size_t n = m.size();
   std::vector<double> rows(3 * n, 0.0);
+  // Row (i, c) of Aᵀ K A is bounded by Σ_d |A_di| Σ_e |K_de| ‖A_e‖₁: each bond's entries count
+  // with the row norms of its two ends (1 for free particles), then dependants' rows fold.
+  const auto reach = constraint_row_norms(m);
   for (std::size_t i = 0; i < n; ++i) {
     double* row = &rows[3 * i];
     // Every bond, broken or not: λ is the bound of the undamaged operator.
-    for_each_linearised_bond(m, i, BrokenBonds::included, [row](const LinearisedBond& b) {
+    for_each_linearised_bond(m, i, BrokenBonds::included, [&](const LinearisedBond& b) {
       double l1 = 0;
       for (std::size_t c = 0; c < 3; ++c) {
         l1 += std::abs(b.direction[c]);
       }
+      const double ends = reach[i] + reach[b.neighbour];
       for (std::size_t c = 0; c < 3; ++c) {
-        row[c] += 2.0 * b.stiffness * std::abs(b.direction[c]) * l1; // Gershgorin row sum of (i, c)
+        row[c] += ends * b.stiffness * std::abs(b.direction[c]) * l1; // Gershgorin row sum
       }
     });
   }
-  // A mirror master's row of Rᵀ K R also holds its dependants' rows (their columns fold onto
-  // masters too, which can only lower the absolute sum): adding them keeps the bound.
+  // A source's row of Aᵀ K A also holds its dependants' rows: adding them keeps the bound.
   fold_mirror_bounds(m, rows.data());
   std::vector<double> lambda(3 * n, 0.0);
   for (std::size_t i = 0; i < n; ++i) {

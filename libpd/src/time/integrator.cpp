@@ -60,6 +60,28 @@ void apply_constraints(const Model& model, const LoadRamp& ramp, double t, doubl
       velocity[dof] = rate * c.value;
     }
   }
+  // Extrapolated particles (ghost_layers.hpp) last: their sources may be prescribed.
+  const ExtrapolatedParticles& e = model.extrapolated;
+  for (std::size_t d = 0; d < e.size(); ++d) {
+    const std::size_t p = e.particle[d];
+    double du[3] = {0, 0, 0};
+    double dv[3] = {0, 0, 0};
+    for (std::size_t term = e.offsets[d]; term < e.offsets[d + 1]; ++term) {
+      const std::size_t s = e.source[term];
+      for (std::size_t c = 0; c < 3; ++c) {
+        du[c] += e.coefficient[term] * (position[3 * s + c] - x[s][c]);
+        if (velocity != nullptr) {
+          dv[c] += e.coefficient[term] * velocity[3 * s + c];
+        }
+      }
+    }
+    for (std::size_t c = 0; c < 3; ++c) {
+      position[3 * p + c] = x[p][c] + du[c];
+      if (velocity != nullptr) {
+        velocity[3 * p + c] = dv[c];
+      }
+    }
+  }
 }
 
 StepReport displacement_report(const Model& m, const double* y) {

@@ -22,7 +22,7 @@ double bond_force(const Simulation& sim, const std::vector<std::uint32_t>& parti
 std::vector<std::uint32_t> particles_in(const Model& model, const Region& region) {
   std::vector<std::uint32_t> out;
   const double tol = 1e-6 * model.spec.lattice.spacing;
-  for (std::size_t i = 0; i < model.size(); ++i) {
+  for (std::size_t i = 0; i < model.body_particle_count(); ++i) {
     if (region.contains(model.particles.position[i], model.spec.dimension.dim, tol)) {
       out.push_back(static_cast<std::uint32_t>(i));
     }

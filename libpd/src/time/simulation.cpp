@@ -48,7 +48,7 @@ Simulation::Simulation(Model& model, const SolverSpec& solver, const InitialSpec
   // Mirror dependants' forces go back to their images (Rᵀ) under consistent coupling, so every
   // integrator sees the symmetric constrained operator (discretisation/mirror_constraints.hpp).
   forces_ = make_constrained_force_evaluator(model);
-  massless_ = massless_mirror_particles(model);
+  massless_ = massless_dependants(model);
   dt_stable_ = stable_time_step(model);
   IntegratorSettings is;
   is.kind = solver.integrator;

@@ -36,11 +36,16 @@ namespace {
 /// Where a global dof's displacement comes from.
 struct DofMap {
   static constexpr std::ptrdiff_t none = -1;
+  /// One term u_g += coefficient · u_dof of a dependent dof (its sources are free or prescribed).
+  struct Term {
+    std::size_t dof;
+    double coefficient;
+  };
   std::vector<std::ptrdiff_t> free_index; ///< free unknown, or none
-  std::vector<std::ptrdiff_t> master;     ///< for mirror dependants: the master's global dof
-  std::vector<double> sign;               ///< σ of a mirror dependant
+  std::vector<std::vector<Term>> terms;   ///< a dependant's sources (mirror image, extrapolation)
   std::vector<double> prescribed;         ///< value of a fixed/prescribed dof (full load)
-  std::vector<std::uint8_t> kind;         ///< 0 free, 1 prescribed, 2 mirror dependant
+  std::vector<std::uint8_t> kind;         ///< 0 free, 1 prescribed, 2 dependant
+  std::vector<std::uint8_t> folds_row;    ///< a dependant whose equation folds onto its sources
   std::vector<std::size_t> free_dofs;     ///< global dof of each unknown
 };
 
@@ -48,25 +53,37 @@ DofMap map_dofs(const Model& m) {
   const std::size_t ndof = 3 * m.size();
   DofMap d;
   d.free_index.assign(ndof, DofMap::none);
-  d.master.assign(ndof, DofMap::none);
-  d.sign.assign(ndof, 0.0);
+  d.terms.assign(ndof, {});
   d.prescribed.assign(ndof, 0.0);
   d.kind.assign(ndof, 0);
+  d.folds_row.assign(ndof, 0);
   const int dim = m.spec.dimension.dim;
   for (std::size_t g = 0; g < ndof; ++g) {
     if (static_cast<int>(g % 3) >= dim) {
       d.kind[g] = 1; // out-of-plane components stay zero
     }
   }
+  const bool consistent = consistent_mirror_coupling(m);
   for (const Constraint& c : m.constraints) {
     const std::size_t g = 3 * c.particle + c.component;
     if (c.mirror_of != Constraint::no_mirror) {
       d.kind[g] = 2;
-      d.master[g] = static_cast<std::ptrdiff_t>(3 * c.mirror_of + c.component);
-      d.sign[g] = c.mirror_sign;
+      d.terms[g] = {{3 * c.mirror_of + c.component, c.mirror_sign}};
+      d.folds_row[g] = consistent ? 1 : 0;
     } else {
       d.kind[g] = 1;
       d.prescribed[g] = c.value;
+    }
+  }
+  const ExtrapolatedParticles& e = m.extrapolated;
+  for (std::size_t k = 0; k < e.size(); ++k) {
+    for (std::size_t a = 0; a < static_cast<std::size_t>(dim); ++a) {
+      const std::size_t g = 3 * e.particle[k] + a;
+      d.kind[g] = 2;
+      d.folds_row[g] = 1;
+      for (std::size_t t = e.offsets[k]; t < e.offsets[k + 1]; ++t) {
+        d.terms[g].push_back({3 * e.source[t] + a, e.coefficient[t]});
+      }
     }
   }
   for (std::size_t g = 0; g < ndof; ++g) {
@@ -107,65 +124,80 @@ public:
   std::string report() const override { return report_; }
 
 private:
-  /// K (free × free, per unit volume) and the right-hand side b_ext − K_fp u_p.
+  /// K (free × free, per unit volume) and the right-hand side. With u = A u_f + u_p (A maps the
+  /// unknowns to every dof: free dofs themselves, dependants through their terms; u_p holds the
+  /// prescribed values and what dependants take from prescribed sources) and B the map of
+  /// equations (free rows themselves; a dependant whose forces fold sends its row to its sources
+  /// with a V_d / V_s, as fold_mirror_forces does), the system is Bᵀ K A u_f = Bᵀ (b_ext − K u_p):
+  /// Aᵀ K A, symmetric, when every dependant folds; K_ff + K_fd A under `copy` mirrors.
   Eigen::SparseMatrix<double> assemble(const DofMap& d, Eigen::VectorXd& rhs) const {
+    using Sparse = Eigen::SparseMatrix<double>;
+    const auto ndof = static_cast<Eigen::Index>(3 * model_.size());
     const auto n = static_cast<Eigen::Index>(d.free_dofs.size());
-    const bool fold_rows = consistent_mirror_coupling(model_);
-    std::vector<Eigen::Triplet<double>> triplets;
-    rhs = Eigen::VectorXd::Zero(n);
-    const std::vector<double>& ext = model_.external_force_density;
+    const auto& volume = model_.particles.volume;
 
-    // Row of the equation of global dof g: its own if free; a consistent mirror dependant's
-    // folds onto its master with σ V_d / V_m; other rows are reactions, not equations.
-    auto row_of = [&](std::size_t g, double& weight) -> std::ptrdiff_t {
-      weight = 1.0;
-      if (d.kind[g] == 0) {
-        return d.free_index[g];
-      }
-      if (d.kind[g] == 2 && fold_rows) {
-        const auto mg = static_cast<std::size_t>(d.master[g]);
-        weight = d.sign[g] * model_.particles.volume[g / 3] / model_.particles.volume[mg / 3];
-        return d.free_index[mg];
-      }
-      return DofMap::none;
-    };
-    // Column: free unknown, a mirror master's (times σ), or a known value to the right side.
-    auto add = [&](std::ptrdiff_t row, double weight, std::size_t gcol, double value) {
-      if (d.kind[gcol] == 0) {
-        triplets.emplace_back(row, d.free_index[gcol], weight * value);
-      } else if (d.kind[gcol] == 2) {
-        const auto mg = static_cast<std::size_t>(d.master[gcol]);
-        triplets.emplace_back(row, d.free_index[mg], weight * value * d.sign[gcol]);
-      } else {
-        rhs[row] -= weight * value * d.prescribed[gcol];
-      }
-    };
+    std::vector<Eigen::Triplet<double>> triplets;
+    triplets.reserve(18 * model_.family.directed_bond_count());
     for (std::size_t i = 0; i < model_.size(); ++i) {
       for_each_linearised_bond(model_, i, BrokenBonds::left_out, [&](const LinearisedBond& b) {
+        if (b.stiffness == 0.0) {
+          return; // bonds between two dependants carry no energy (ghost_layers.hpp)
+        }
         for (std::size_t a = 0; a < 3; ++a) {
-          double w = 0;
-          const std::ptrdiff_t row = row_of(3 * i + a, w);
-          if (row == DofMap::none) {
-            continue;
-          }
           for (std::size_t c = 0; c < 3; ++c) {
             const double k = b.stiffness * b.direction[a] * b.direction[c];
-            add(row, w, 3 * i + c, k);
-            add(row, w, 3 * b.neighbour + c, -k);
+            const auto row = static_cast<Eigen::Index>(3 * i + a);
+            triplets.emplace_back(row, static_cast<Eigen::Index>(3 * i + c), k);
+            triplets.emplace_back(row, static_cast<Eigen::Index>(3 * b.neighbour + c), -k);
           }
         }
       });
-      for (std::size_t a = 0; a < 3 && !ext.empty(); ++a) {
-        double w = 0;
-        if (const std::ptrdiff_t row = row_of(3 * i + a, w); row != DofMap::none) {
-          rhs[row] += w * ext[3 * i + a];
+    }
+    Sparse K(ndof, ndof);
+    K.setFromTriplets(triplets.begin(), triplets.end());
+    triplets.clear();
+    triplets.shrink_to_fit();
+
+    std::vector<Eigen::Triplet<double>> a_entries;
+    std::vector<Eigen::Triplet<double>> b_entries;
+    Eigen::VectorXd known = Eigen::VectorXd::Zero(ndof);
+    for (std::size_t g = 0; g < d.kind.size(); ++g) {
+      const auto row = static_cast<Eigen::Index>(g);
+      if (d.kind[g] == 0) {
+        a_entries.emplace_back(row, d.free_index[g], 1.0);
+        b_entries.emplace_back(row, d.free_index[g], 1.0);
+      } else if (d.kind[g] == 1) {
+        known[row] = d.prescribed[g];
+      } else {
+        for (const DofMap::Term& t : d.terms[g]) {
+          if (d.kind[t.dof] == 0) {
+            a_entries.emplace_back(row, d.free_index[t.dof], t.coefficient);
+            if (d.folds_row[g]) {
+              b_entries.emplace_back(row, d.free_index[t.dof],
+                                     t.coefficient * volume[g / 3] / volume[t.dof / 3]);
+            }
+          } else {
+            known[row] += t.coefficient * d.prescribed[t.dof];
+          }
         }
       }
     }
-    Eigen::SparseMatrix<double> K(n, n);
-    K.setFromTriplets(triplets.begin(), triplets.end());
-    K.makeCompressed();
-    return K;
+    Sparse A(ndof, n);
+    A.setFromTriplets(a_entries.begin(), a_entries.end());
+    Sparse B(ndof, n);
+    B.setFromTriplets(b_entries.begin(), b_entries.end());
+
+    Eigen::VectorXd load = Eigen::VectorXd::Zero(ndof);
+    const std::vector<double>& ext = model_.external_force_density;
+    for (std::size_t g = 0; g < ext.size(); ++g) {
+      load[static_cast<Eigen::Index>(g)] = ext[g];
+    }
+    rhs = B.transpose() * (load - K * known);
+    const Sparse KA = K * A;
+    Sparse reduced = B.transpose() * KA;
+    reduced.prune(0.0);
+    reduced.makeCompressed();
+    return reduced;
   }
 
   void solve(State& st) {

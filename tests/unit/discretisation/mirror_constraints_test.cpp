@@ -182,7 +182,7 @@ TEST(MirrorConstraints, CopyCouplingIsTheOneSidedClamp) {
   const pd::Model copy = pd::build_model(spec);
   EXPECT_FALSE(pd::consistent_mirror_coupling(copy));
   EXPECT_TRUE(pd::consistent_mirror_coupling(consistent));
-  const auto massless = pd::massless_mirror_particles(copy);
+  const auto massless = pd::massless_dependants(copy);
   EXPECT_EQ(std::count(massless.begin(), massless.end(), 1), 0);
   const auto weight = pd::mirror_bond_weights(
       copy.family, pd::mirror_dependent_particles(copy.size(), copy.constraints));

@@ -21,3 +21,25 @@ struct Constraint {
 };
 
 } // namespace pd
+
+#include <cstddef>
+#include <vector>
+
+namespace pd {
+
+/// Dependent particles whose displacement is a fixed linear combination of other particles'
+/// displacements, the same in every component: u_d = Σ_k a_k u_{s_k}. Ghost layers outside free
+/// surfaces and the particles of a quadratically extrapolated clamp are of this kind
+/// (discretisation/ghost_layers.hpp). Sources are never dependants themselves, so one pass sets
+/// every dependant and one pass of the transpose folds their forces back.
+struct ExtrapolatedParticles {
+  std::vector<std::uint32_t> particle; ///< the dependants, ascending
+  std::vector<std::size_t> offsets{0}; ///< terms of dependant d: [offsets[d], offsets[d + 1])
+  std::vector<std::uint32_t> source;
+  std::vector<double> coefficient;
+
+  std::size_t size() const { return particle.size(); }
+  bool empty() const { return particle.empty(); }
+};
+
+} // namespace pd

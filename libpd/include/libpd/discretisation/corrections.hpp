@@ -21,7 +21,7 @@
 namespace pd {
 
 /// Per-bond modifiers of the bond stiffness, beyond the neighbour volume (corrections.hpp).
-enum class SurfaceCorrection { none, volume, energy, macek_silling, tensor };
+enum class SurfaceCorrection { none, volume, energy, macek_silling, tensor, ghost };
 /// Quadrature weights of the bonds: partial-volume corrections of neighbour cells cut by the
 /// horizon (`linear`, `exact`), or lattice weights that reproduce the continuum's fourth moments
 /// (`moment`, see corrections.hpp).
@@ -29,13 +29,15 @@ enum class VolumeCorrection { none, linear, exact, moment };
 
 template <>
 struct EnumName<SurfaceCorrection> {
-  static constexpr NameTable<SurfaceCorrection, 5> table{{
+  static constexpr NameTable<SurfaceCorrection, 6> table{{
       {"none", SurfaceCorrection::none, "no correction"},
       {"volume", SurfaceCorrection::volume, "volume method"},
       {"energy", SurfaceCorrection::energy, "energy method"},
       {"macek-silling", SurfaceCorrection::macek_silling,
        "classical over PD energy density under isotropic expansion"},
       {"tensor", SurfaceCorrection::tensor, "tensor method"},
+      {"ghost", SurfaceCorrection::ghost,
+       "ghost layers outside free surfaces, quadratic-exact (ghost_layers.hpp)"},
   }};
 };
 

@@ -46,15 +46,18 @@ namespace pd {
 /// take their images' displacements and keep their forces (operator K_ff + K_fs R, not symmetric
 /// for a clamp, can grow). `consistent`: forces from one energy of the free particles, support
 /// forces sent back to the images (Rᵀ K_w R, symmetric, energy-conserving).
-enum class MirrorCoupling { copy, consistent };
+enum class MirrorCoupling { copy, consistent, quadratic };
 
 template <>
 struct EnumName<MirrorCoupling> {
-  static constexpr NameTable<MirrorCoupling, 2> table{{
+  static constexpr NameTable<MirrorCoupling, 3> table{{
       {"copy", MirrorCoupling::copy,
        "support particles copy their images' displacements and keep their forces (one-sided)"},
       {"consistent", MirrorCoupling::consistent,
        "support forces sent back to the images: symmetric, energy-conserving"},
+      {"quadratic", MirrorCoupling::quadratic,
+       "support particles extrapolated from the body by quadratics that vanish on the face "
+       "(ghost_layers.hpp): symmetric, exact for every quadratic field the clamp allows"},
   }};
 };
 

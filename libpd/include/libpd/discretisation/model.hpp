@@ -5,11 +5,13 @@
 #include "libpd/core/names.hpp"
 #include "libpd/discretisation/bond_family.hpp"
 #include "libpd/discretisation/corrections.hpp"
+#include "libpd/discretisation/ghost_layers.hpp"
 #include "libpd/discretisation/lattice.hpp"
 #include "libpd/discretisation/mirror_constraints.hpp"
 #include "libpd/physics/effects.hpp"
 #include "libpd/physics/material.hpp"
 
+#include <cstddef>
 #include <cstdint>
 #include <limits>
 #include <stdexcept>
@@ -108,11 +110,18 @@ struct Model {
   BondField field;
   BondState state;
   EffectSet effects;
-  std::vector<double> density;                ///< per particle [kg/m³]
-  std::vector<Constraint> constraints;        ///< sorted by particle, then component
+  std::vector<double> density;         ///< per particle [kg/m³]
+  std::vector<Constraint> constraints; ///< sorted by particle, then component
+  /// Ghost particles and quadratically extrapolated clamp particles (ghost_layers.hpp): massless,
+  /// set from their sources after every update, their forces folded back onto the sources.
+  ExtrapolatedParticles extrapolated;
+  /// The last `ghost_count` particles are ghost sites outside the bodies (surface_correction
+  /// `ghost`); supports, loads, probes and output see only the body particles before them.
+  std::size_t ghost_count = 0;
   std::vector<double> external_force_density; ///< 3N, full (unramped) load [N/m³]
 
   std::size_t size() const { return particles.size(); }
+  std::size_t body_particle_count() const { return particles.size() - ghost_count; }
   double horizon() const { return spec.lattice.horizon(); }
   /// Bytes held by the model (particles, families, bond field and history).
   std::size_t memory_bytes() const;
@@ -156,10 +165,16 @@ struct SupportError : std::runtime_error {
   std::size_t support;
 };
 
-/// The constraints of spec.supports on `particles`, sorted by particle and component (a later
-/// support overrides an earlier one on the same component). Throws SupportError for a support
-/// that holds no particle or whose mirror images are not free lattice particles.
-std::vector<Constraint> support_constraints(const ModelSpec& spec, const ParticleSet& particles);
+/// The constraints of spec.supports on the first `body_particles` of `particles` (all of them by
+/// default), sorted by particle and component (a later support overrides an earlier one on the
+/// same component). Mirror supports under `quadratic` coupling add none: their particles are
+/// extrapolated (clamp_planes). Throws SupportError for a support that holds no particle or whose
+/// mirror images are not free lattice particles.
+std::vector<Constraint> support_constraints(const ModelSpec& spec, const ParticleSet& particles,
+                                            std::size_t body_particles = SIZE_MAX);
+
+/// The clamp planes of spec's mirror supports, each with the side its support's region lies on.
+std::vector<ClampPlane> clamp_planes(const ModelSpec& spec);
 
 /// Build particles, families, bond parameters, supports and loads.
 /// Throws std::runtime_error for inconsistent specs that the scene checker did not catch.

@@ -59,17 +59,31 @@ void apply_linearised_operator(const Model& m, const double* u, double* out);
 /// consistent_mirror_coupling for a built model.
 bool consistent_mirror_coupling(const Model& model);
 
-/// Per particle: 1 for the particles that carry no mass and are not integrated: the mirror
-/// dependants under consistent coupling, none under `copy`.
-std::vector<std::uint8_t> massless_mirror_particles(const Model& model);
+/// Whether the model has dependants whose forces are folded back onto their sources: mirror
+/// supports under consistent coupling, ghosts and extrapolated clamps (ghost_layers.hpp).
+bool folds_dependants(const Model& model);
 
-/// v_master += σ · v_dependant · V_dependant / V_master for every mirror constraint: the transpose
-/// of the constraint applied to a force density (3N). The dependants' entries are left as they
-/// are (they are reactions, never integrated). Does nothing unless consistent_mirror_coupling.
+/// Per particle: 1 for the particles that carry no mass and are not integrated: the mirror
+/// dependants under consistent coupling (none under `copy`) and the extrapolated particles.
+std::vector<std::uint8_t> massless_dependants(const Model& model);
+
+/// Per particle: the 1-norm of its row of the constraint map u = A u_f (Σ_k |a_k| for an
+/// extrapolated particle, 1 otherwise). A bond's share of a Gershgorin bound of Aᵀ K A is its
+/// stiffness times the sum of its two ends' norms, before the rows are folded.
+std::vector<double> constraint_row_norms(const Model& model);
+
+/// v_source += a · v_dependant · V_dependant / V_source for every mirror constraint (a = σ) and
+/// every extrapolated particle's term: the transpose of the constraints applied to a force
+/// density (3N). The dependants' entries are left as they are (they are reactions, never
+/// integrated). Mirror constraints fold only under consistent coupling.
 void fold_mirror_forces(const Model& model, double* force_density);
 
-/// The same with |σ|, for non-negative per-dof bounds such as Gershgorin row sums (3N).
+/// The same with |a|, for non-negative per-dof bounds such as Gershgorin row sums (3N).
 void fold_mirror_bounds(const Model& model, double* bound);
+
+/// Sets every extrapolated particle's entries of a 3N displacement-like vector (displacements or
+/// velocities, relative to the reference configuration) from its sources: v_d = Σ a v_s.
+void set_extrapolated(const Model& model, double* v);
 
 /// The linearised constrained operator: sets the mirror dependants' entries of u to R u (in place,
 /// as apply_constraints does), applies K (apply_linearised_operator), then folds the dependants'
@@ -77,8 +91,8 @@ void fold_mirror_bounds(const Model& model, double* bound);
 /// the free degrees of freedom (weighted by volume); K_ff + K_fs R under `copy`.
 void apply_constrained_operator(const Model& m, double* u, double* ku);
 
-/// make_force_evaluator whose compute() then folds the mirror dependants' forces onto their
-/// masters (fold_mirror_forces): the plain evaluator unless consistent_mirror_coupling. The bond
+/// make_force_evaluator whose compute() then folds the dependants' forces onto their sources
+/// (fold_mirror_forces): the plain evaluator unless folds_dependants. The bond
 /// weights are already in the model's bond field (build_model), so strain_energy() is W_c
 /// (discretisation/mirror_constraints.hpp).
 std::unique_ptr<ForceEvaluator> make_constrained_force_evaluator(Model& model);

@@ -1,0 +1,82 @@
+// Quadratic-exact surfaces and clamps (issue 14, item 2).
+//
+// A particle near a free surface misses the part of its horizon that lies outside the body, so
+// under any strain it stores too little energy; every per-bond correction calibrated under
+// uniform strain (corrections.hpp) gets tension right but not bending, because bonds sample the
+// strain at their midpoints and a surface particle's remaining bonds all point into the body.
+//
+// Ghost layers give every body particle its whole horizon instead. The lattice sites outside the
+// bodies within δ of a body particle become ghost particles whose displacement is extrapolated
+// from the body: for each ghost, the quadratic polynomial (per component) that fits, in the
+// least-squares sense, the displacements of the free body particles around the nearest one is
+// evaluated at the ghost. The fit reproduces every quadratic field exactly, so under any uniform
+// or linearly varying strain (tension, shear, bending, twist) each body particle sees the field
+// it would see inside an infinite body. With the energy
+//   W_c(u_f) = Σ_{body–body bonds} w + ½ Σ_{body–ghost bonds} w,   u_ghost = A u_f,
+// (ghost–ghost bonds carry nothing, as between a mirror support's particles) each body particle
+// then stores exactly the bulk energy density of the field at its own position, and the body's
+// energy is the bulk lattice rule applied cell by cell. Forces are −∂W_c/∂u_f: the ghosts' forces
+// are folded back onto their sources through Aᵀ, so the operator Aᵀ K A stays symmetric.
+//
+// A clamped face is the same construction with the polynomials restricted to those that vanish on
+// the face: for a site behind the plane x_a = c the basis is (x_a − c)·{1, x, y, z} (the
+// quadratics that are zero on the plane), behind two planes (x_a − c)(x_b − d), behind three the
+// displacement is zero. Every quadratic field that satisfies the clamp is then reproduced, which
+// the odd mirror image does only for fields odd in x_a: a beam's deflection near a clamp,
+// u_z ∝ x², is continued by the mirror as −sign(x)·x², with a kink in the curvature at the face
+// that the crossing bonds feel (+1.2 % stiffness on the clamped beam at the paper's resolution,
+// measured).
+//
+// What stays: the bulk lattice's own response to a strain gradient (its sixth moments), which
+// ghosts do not change. The `gradient` bond weights (corrections.hpp) set it to what each
+// particle's cell holds.
+#pragma once
+
+#include "libpd/core/geometry.hpp"
+#include "libpd/discretisation/bond_family.hpp"
+#include "libpd/discretisation/constraint.hpp"
+#include "libpd/discretisation/lattice.hpp"
+
+#include <cstdint>
+#include <vector>
+
+namespace pd {
+
+/// A plane x_axis = at on which a clamp holds the displacement at zero; the clamp's own
+/// particles lie on the side sign(x_axis − at) = side.
+struct ClampPlane {
+  int axis = 0;
+  double at = 0;
+  double side = -1;
+
+  /// Whether p lies strictly on the clamp's side (beyond round-off of the lattice).
+  bool behind(const Vec3& p, double tolerance) const {
+    return side * (p[static_cast<std::size_t>(axis)] - at) > tolerance;
+  }
+};
+
+/// The lattice sites that are not particles of `body` but lie within the horizon of one of them:
+/// where ghost particles go. A particle's own site is its position rounded to the lattice, so
+/// jittered particle sets keep their ghosts on the regular lattice. Deterministic order (sorted
+/// by site, x fastest).
+std::vector<Vec3> ghost_sites(int dim, const LatticeSpec& lattice, HorizonRule rule,
+                              const std::vector<Vec3>& body);
+
+/// Extrapolation coefficients for every particle listed in `fitted` (ascending), from the
+/// particles with dependent[i] = 0 (the sources; every fitted particle is dependent too): each
+/// dependant is fitted around the nearest source among its bond family, from that source and its
+/// own free neighbours, with the quadratic basis restricted by the clamp planes the dependant lies
+/// behind (see above). A dependant with no source within the horizon, or behind three planes, gets
+/// no term (its displacement stays zero). Axes along which the sources do not vary enough for a
+/// linear (two positions) or quadratic (three) term drop those terms, so thin bodies extrapolate
+/// with what they can resolve.
+ExtrapolatedParticles extrapolation_ties(int dim, double spacing, const std::vector<Vec3>& position,
+                                         const BondFamily& family,
+                                         const std::vector<std::uint8_t>& dependent,
+                                         const std::vector<std::uint32_t>& fitted,
+                                         const std::vector<ClampPlane>& planes);
+
+/// Per particle: 1 for the dependants of `ties`.
+void mark_dependants(const ExtrapolatedParticles& ties, std::vector<std::uint8_t>& flags);
+
+} // namespace pd

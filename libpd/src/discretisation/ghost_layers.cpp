@@ -1,0 +1,236 @@
+#include "libpd/discretisation/ghost_layers.hpp"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <unordered_set>
+
+namespace pd {
+
+namespace {
+
+using Site = std::array<long long, 3>;
+
+struct SiteHash {
+  std::size_t operator()(const Site& s) const {
+    std::uint64_t h = 1469598103934665603ULL;
+    for (long long v : s) {
+      h = (h ^ static_cast<std::uint64_t>(v)) * 1099511628211ULL;
+    }
+    return static_cast<std::size_t>(h);
+  }
+};
+
+double lattice_shift(const LatticeSpec& l) {
+  return l.convention == LatticeConvention::cell_centered ? 0.5 : 0.0;
+}
+
+/// The lattice site a particle belongs to (its position rounded to the lattice).
+Site site_of(const Vec3& x, int dim, const LatticeSpec& l) {
+  Site s{0, 0, 0};
+  for (std::size_t a = 0; a < static_cast<std::size_t>(dim); ++a) {
+    s[a] = std::llround((x[a] - l.origin[a]) / l.spacing - lattice_shift(l));
+  }
+  return s;
+}
+
+/// Quadratic basis around a dependant at p, restricted by the clamp planes it lies behind.
+class Basis {
+public:
+  Basis(int dim, double spacing, const Vec3& p, std::vector<ClampPlane> behind,
+        const std::vector<Vec3>& position, const std::vector<std::uint32_t>& sources)
+      : dim_(static_cast<std::size_t>(dim)), spacing_(spacing), p_(p), behind_(std::move(behind)) {
+    // Along which axes the sources vary enough for a linear (2 positions) or quadratic (3) term.
+    std::array<std::size_t, 3> distinct{0, 0, 0};
+    for (std::size_t a = 0; a < dim_; ++a) {
+      std::vector<long long> values;
+      for (std::uint32_t j : sources) {
+        values.push_back(std::llround(4.0 * (position[j][a] - p_[a]) / spacing_));
+      }
+      std::sort(values.begin(), values.end());
+      distinct[a] =
+          static_cast<std::size_t>(std::unique(values.begin(), values.end()) - values.begin());
+    }
+    const int degree = 2 - static_cast<int>(behind_.size());
+    terms_.push_back({-1, -1}); // the constant
+    if (degree >= 1) {
+      for (int a = 0; a < dim; ++a) {
+        if (distinct[static_cast<std::size_t>(a)] >= 2) {
+          terms_.push_back({a, -1});
+        }
+      }
+    }
+    if (degree >= 2) {
+      for (int a = 0; a < dim; ++a) {
+        for (int b = a; b < dim; ++b) {
+          const std::size_t need_a = a == b ? 3 : 2;
+          if (distinct[static_cast<std::size_t>(a)] >= need_a &&
+              distinct[static_cast<std::size_t>(b)] >= 2) {
+            terms_.push_back({a, b});
+          }
+        }
+      }
+    }
+  }
+
+  std::size_t size() const { return terms_.size(); }
+
+  /// Every basis function at x.
+  void evaluate(const Vec3& x, double* out) const {
+    double factor = 1;
+    for (const ClampPlane& c : behind_) {
+      factor *= (x[static_cast<std::size_t>(c.axis)] - c.at) / spacing_;
+    }
+    for (std::size_t t = 0; t < terms_.size(); ++t) {
+      double v = factor;
+      for (int a : {terms_[t][0], terms_[t][1]}) {
+        if (a >= 0) {
+          v *= (x[static_cast<std::size_t>(a)] - p_[static_cast<std::size_t>(a)]) / spacing_;
+        }
+      }
+      out[t] = v;
+    }
+  }
+
+private:
+  std::size_t dim_;
+  double spacing_;
+  Vec3 p_;
+  std::vector<ClampPlane> behind_;
+  std::vector<std::array<int, 2>> terms_; ///< axes of the monomial's factors, −1 for none
+};
+
+/// The minimum-norm weights a with Σ_j a_j f(x_j) = f(p) for every basis function f: the value
+/// at p of the least-squares fit through the sources.
+std::vector<double> fit_weights(const Basis& basis, const Vec3& p,
+                                const std::vector<Vec3>& position,
+                                const std::vector<std::uint32_t>& sources) {
+  const auto k = static_cast<Eigen::Index>(basis.size());
+  const auto m = static_cast<Eigen::Index>(sources.size());
+  Eigen::MatrixXd P(m, k);
+  std::vector<double> row(basis.size());
+  for (Eigen::Index s = 0; s < m; ++s) {
+    basis.evaluate(position[sources[static_cast<std::size_t>(s)]], row.data());
+    for (Eigen::Index t = 0; t < k; ++t) {
+      P(s, t) = row[static_cast<std::size_t>(t)];
+    }
+  }
+  Eigen::VectorXd phi(k);
+  basis.evaluate(p, row.data());
+  for (Eigen::Index t = 0; t < k; ++t) {
+    phi(t) = row[static_cast<std::size_t>(t)];
+  }
+  // Pᵀ a = φ, underdetermined (m ≥ k): the complete orthogonal decomposition gives the
+  // minimum-norm solution, i.e. a = P (PᵀP)⁻¹ φ without forming PᵀP.
+  const Eigen::MatrixXd Pt = P.transpose();
+  const Eigen::VectorXd a = Pt.completeOrthogonalDecomposition().solve(phi);
+  return {a.data(), a.data() + a.size()};
+}
+
+} // namespace
+
+std::vector<Vec3> ghost_sites(int dim, const LatticeSpec& lattice, HorizonRule rule,
+                              const std::vector<Vec3>& body) {
+  std::unordered_set<Site, SiteHash> occupied;
+  occupied.reserve(body.size());
+  for (const Vec3& x : body) {
+    occupied.insert(site_of(x, dim, lattice));
+  }
+  std::unordered_set<Site, SiteHash> ghosts;
+  for (const Vec3& x : body) {
+    const Site base = site_of(x, dim, lattice);
+    for_each_offset_within(lattice.horizon_factor, dim, rule, [&](const Site& o) {
+      const Site s{base[0] + o[0], base[1] + o[1], base[2] + o[2]};
+      if (!occupied.contains(s)) {
+        ghosts.insert(s);
+      }
+    });
+  }
+  std::vector<Site> sorted(ghosts.begin(), ghosts.end());
+  std::sort(sorted.begin(), sorted.end(), [](const Site& a, const Site& b) {
+    return std::tie(a[2], a[1], a[0]) < std::tie(b[2], b[1], b[0]);
+  });
+  std::vector<Vec3> out;
+  out.reserve(sorted.size());
+  const Vec3 unused_axes = body.empty() ? Vec3{0, 0, 0} : body.front();
+  for (const Site& s : sorted) {
+    Vec3 p = unused_axes;
+    for (std::size_t a = 0; a < static_cast<std::size_t>(dim); ++a) {
+      p[a] = lattice.origin[a] +
+             (static_cast<double>(s[a]) + lattice_shift(lattice)) * lattice.spacing;
+    }
+    out.push_back(p);
+  }
+  return out;
+}
+
+ExtrapolatedParticles extrapolation_ties(int dim, double spacing, const std::vector<Vec3>& position,
+                                         const BondFamily& family,
+                                         const std::vector<std::uint8_t>& dependent,
+                                         const std::vector<std::uint32_t>& fitted,
+                                         const std::vector<ClampPlane>& planes) {
+  ExtrapolatedParticles ties;
+  const double tolerance = 1e-6 * spacing;
+  const auto free_family = [&](std::size_t i, std::vector<std::uint32_t>& out) {
+    for (std::size_t k = family.offsets[i]; k < family.offsets[i + 1]; ++k) {
+      if (!dependent[family.neighbour[k]]) {
+        out.push_back(family.neighbour[k]);
+      }
+    }
+  };
+  std::vector<std::uint32_t> near;
+  std::vector<std::uint32_t> sources;
+  for (const std::uint32_t i : fitted) {
+    ties.particle.push_back(i);
+    const Vec3& p = position[i];
+    std::vector<ClampPlane> behind;
+    for (const ClampPlane& c : planes) {
+      if (c.behind(p, tolerance)) {
+        behind.push_back(c);
+      }
+    }
+    near.clear();
+    free_family(i, near);
+    if (near.empty() || behind.size() >= 3) {
+      ties.offsets.push_back(ties.source.size()); // out of reach, or held on three planes: zero
+      continue;
+    }
+    // The nearest source (lowest index among equals, so the choice is reproducible).
+    std::uint32_t nearest = near.front();
+    double best = std::numeric_limits<double>::infinity();
+    for (std::uint32_t j : near) {
+      double d2 = 0;
+      for (std::size_t a = 0; a < 3; ++a) {
+        d2 += (position[j][a] - p[a]) * (position[j][a] - p[a]);
+      }
+      if (d2 < best - tolerance * tolerance ||
+          (std::abs(d2 - best) <= tolerance * tolerance && j < nearest)) {
+        best = std::min(best, d2);
+        nearest = j;
+      }
+    }
+    sources.assign(1, nearest);
+    free_family(nearest, sources);
+    std::sort(sources.begin(), sources.end());
+    const Basis basis(dim, spacing, p, behind, position, sources);
+    const std::vector<double> a = fit_weights(basis, p, position, sources);
+    for (std::size_t s = 0; s < sources.size(); ++s) {
+      if (a[s] != 0.0) {
+        ties.source.push_back(sources[s]);
+        ties.coefficient.push_back(a[s]);
+      }
+    }
+    ties.offsets.push_back(ties.source.size());
+  }
+  return ties;
+}
+
+void mark_dependants(const ExtrapolatedParticles& ties, std::vector<std::uint8_t>& flags) {
+  for (std::uint32_t d : ties.particle) {
+    flags[d] = 1;
+  }
+}
+
+} // namespace pd

@@ -1,0 +1,255 @@
+// Ghost layers and quadratically extrapolated clamps (issue 14, item 2): every quadratic field
+// costs each body particle exactly the energy of a bulk particle, a clamp reproduces every
+// quadratic field that vanishes on its face, and the constrained operator is symmetric.
+#include "libpd/discretisation/ghost_layers.hpp"
+#include "libpd/discretisation/model.hpp"
+#include "libpd/kernel/linear_operator.hpp"
+
+#include <cmath>
+#include <functional>
+#include <gtest/gtest.h>
+#include <random>
+#include <vector>
+
+namespace {
+
+constexpr double lambda = 0.1;
+using Field = std::function<pd::Vec3(const pd::Vec3&)>;
+
+pd::ModelSpec box_spec(int dim, pd::VolumeCorrection v, double horizon_factor) {
+  pd::ModelSpec spec;
+  spec.dimension.dim = dim;
+  spec.dimension.thickness = 1.0;
+  spec.lattice.spacing = lambda;
+  spec.lattice.horizon_factor = horizon_factor;
+  pd::Material mat;
+  mat.youngs_modulus = 2e9;
+  mat.density = 1000;
+  spec.materials = {mat};
+  pd::BodySpec body;
+  body.region.boxes = {pd::Box{{0, 0, 0}, {7 * lambda, 4 * lambda, dim == 3 ? 3 * lambda : 0.0}}};
+  spec.bodies = {body};
+  spec.surface_correction = pd::SurfaceCorrection::ghost;
+  spec.volume_correction = v;
+  return spec;
+}
+
+/// Bond weight of the volume correction for a lattice offset (the bulk's, as build_model gives).
+double bulk_weight(const pd::ModelSpec& spec, const pd::Vec3& xi) {
+  if (spec.volume_correction == pd::VolumeCorrection::moment) {
+    return pd::moment_matched_weights(spec.corrections()).weight(xi);
+  }
+  return 1.0;
+}
+
+/// Σ over body particles of V_i times the energy density of a bulk particle at x_i under u:
+/// ¼ Σ_offsets c w V |ξ| s², s the linearised stretch (exact for a quadratic u).
+double bulk_energy(const pd::Model& m, const Field& u) {
+  const pd::ModelSpec& spec = m.spec;
+  const double c =
+      pd::micromodulus(spec.dimension, spec.materials[0].youngs_modulus, spec.lattice.horizon());
+  const double v = pd::cell_volume(spec.dimension, lambda);
+  double total = 0;
+  for (std::size_t i = 0; i < m.body_particle_count(); ++i) {
+    const pd::Vec3& x = m.particles.position[i];
+    pd::for_each_offset_within(
+        spec.lattice.horizon_factor, spec.dimension.dim, spec.horizon_rule,
+        [&](const std::array<long long, 3>& o) {
+          const pd::Vec3 xi{static_cast<double>(o[0]) * lambda, static_cast<double>(o[1]) * lambda,
+                            static_cast<double>(o[2]) * lambda};
+          const double r = pd::norm(xi);
+          const pd::Vec3 y{x[0] + xi[0], x[1] + xi[1], x[2] + xi[2]};
+          const pd::Vec3 du0 = u(x);
+          const pd::Vec3 du1 = u(y);
+          double s = 0;
+          for (std::size_t a = 0; a < 3; ++a) {
+            s += xi[a] / r * (du1[a] - du0[a]) / r;
+          }
+          total += 0.25 * c * bulk_weight(spec, xi) * v * r * s * s * m.particles.volume[i];
+        });
+  }
+  return total;
+}
+
+/// The model's linearised energy W_c = ½ Σ_i V_i u_i·(K u)_i of u given on the free body
+/// particles (dependants extrapolated; the bond weights ½ and 0 are in the bond field).
+double model_energy(const pd::Model& m, const Field& u) {
+  std::vector<double> disp(3 * m.size(), 0.0);
+  for (std::size_t i = 0; i < m.size(); ++i) {
+    const pd::Vec3 ui = u(m.particles.position[i]);
+    for (std::size_t a = 0; a < 3; ++a) {
+      disp[3 * i + a] = ui[a];
+    }
+  }
+  pd::set_extrapolated(m, disp.data());
+  std::vector<double> ku(3 * m.size());
+  pd::apply_linearised_operator(m, disp.data(), ku.data());
+  double energy = 0;
+  for (std::size_t i = 0; i < m.size(); ++i) {
+    for (std::size_t a = 0; a < 3; ++a) {
+      energy += 0.5 * m.particles.volume[i] * disp[3 * i + a] * ku[3 * i + a];
+    }
+  }
+  return energy;
+}
+
+std::vector<std::pair<const char*, Field>> quadratic_fields(int dim) {
+  const double k = 1e-3; // small: the energy is that of the linearised stretch
+  std::vector<std::pair<const char*, Field>> f = {
+      {"uniaxial",
+       [k](const pd::Vec3& x) {
+         return pd::Vec3{k * x[0], 0, 0};
+       }},
+      {"shear",
+       [k](const pd::Vec3& x) {
+         return pd::Vec3{k * x[1], 0, 0};
+       }},
+      {"bending",
+       [k](const pd::Vec3& x) {
+         return pd::Vec3{k * x[0] * x[1], -0.5 * k * x[0] * x[0] - 0.125 * k * x[1] * x[1], 0};
+       }},
+      {"general quadratic",
+       [k](const pd::Vec3& x) {
+         return pd::Vec3{k * (0.3 * x[0] * x[0] - 0.7 * x[0] * x[1] + 0.2 * x[1]),
+                         k * (0.5 * x[1] * x[1] + 0.4 * x[0] * x[1] - 0.1 * x[0]), 0};
+       }},
+  };
+  if (dim == 3) {
+    f.push_back({"twist", [k](const pd::Vec3& x) {
+                   return pd::Vec3{-k * x[1] * x[2], k * x[0] * x[2], 0.3 * k * x[2] * x[2]};
+                 }});
+  }
+  return f;
+}
+
+struct GhostCase {
+  int dim;
+  pd::VolumeCorrection volume;
+  double horizon_factor;
+};
+
+class GhostLayers : public testing::TestWithParam<GhostCase> {};
+
+TEST_P(GhostLayers, QuadraticFieldsCostEachParticleTheBulkEnergy) {
+  const GhostCase p = GetParam();
+  const pd::Model m = pd::build_model(box_spec(p.dim, p.volume, p.horizon_factor));
+  ASSERT_GT(m.ghost_count, 0u);
+  for (const auto& [name, u] : quadratic_fields(p.dim)) {
+    const double expected = bulk_energy(m, u);
+    const double actual = model_energy(m, u);
+    EXPECT_NEAR(actual / expected, 1.0, 1e-10) << name;
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Lattices, GhostLayers,
+    testing::Values(GhostCase{3, pd::VolumeCorrection::none, 3.0},
+                    GhostCase{3, pd::VolumeCorrection::moment, 2.0 * std::sqrt(3.0)},
+                    GhostCase{2, pd::VolumeCorrection::none, 3.015},
+                    GhostCase{2, pd::VolumeCorrection::moment, 2.0 * std::sqrt(3.0)}));
+
+TEST(GhostLayers, WithoutGhostsTheSurfaceParticlesMissEnergy) {
+  // The reference the test above is sharp against: the same body without ghosts stores less.
+  pd::ModelSpec spec = box_spec(3, pd::VolumeCorrection::none, 3.0);
+  spec.surface_correction = pd::SurfaceCorrection::none;
+  const pd::Model m = pd::build_model(spec);
+  EXPECT_EQ(m.ghost_count, 0u);
+  const auto field = quadratic_fields(3)[2].second;
+  EXPECT_LT(model_energy(m, field) / bulk_energy(m, field), 0.8);
+}
+
+/// A 2D strip on x ∈ [0, 8λ] with a 3λ clamp block beyond x = 0 held by a mirror support.
+pd::ModelSpec clamped_strip(pd::MirrorCoupling coupling) {
+  pd::ModelSpec spec = box_spec(2, pd::VolumeCorrection::none, 3.0);
+  spec.bodies[0].region.boxes = {pd::Box{{-3 * lambda, 0, 0}, {8 * lambda, 4 * lambda, 0}}};
+  pd::SupportSpec clamp;
+  clamp.name = "clamp";
+  clamp.region.boxes = {pd::Box{{-3 * lambda, 0, 0}, {0, 4 * lambda, 0}}};
+  clamp.mirror[0] = true;
+  spec.supports = {clamp};
+  spec.mirror_coupling = coupling;
+  return spec;
+}
+
+TEST(QuadraticClamp, ReproducesEveryQuadraticFieldThatVanishesOnTheFace) {
+  pd::Model m = pd::build_model(clamped_strip(pd::MirrorCoupling::quadratic));
+  const Field u = [](const pd::Vec3& x) {
+    return pd::Vec3{x[0] * (0.2 + 0.5 * x[0] - 0.3 * x[1]), x[0] * (-0.4 + 0.1 * x[0] + 0.7 * x[1]),
+                    0};
+  };
+  std::vector<double> disp(3 * m.size(), 0.0);
+  for (std::size_t i = 0; i < m.size(); ++i) {
+    const pd::Vec3 ui = u(m.particles.position[i]);
+    for (std::size_t a = 0; a < 2; ++a) {
+      disp[3 * i + a] = ui[a];
+    }
+  }
+  std::vector<double> extrapolated = disp;
+  pd::set_extrapolated(m, extrapolated.data());
+  ASSERT_GT(m.extrapolated.size(), 0u);
+  std::size_t behind_the_face = 0;
+  const pd::ExtrapolatedParticles& e = m.extrapolated;
+  for (std::size_t k = 0; k < e.size(); ++k) {
+    if (e.offsets[k] == e.offsets[k + 1]) {
+      continue; // no free particle within its horizon: its bonds carry no energy, it stays at 0
+    }
+    const std::uint32_t d = e.particle[k];
+    behind_the_face += m.particles.position[d][0] < 0 ? 1 : 0;
+    for (std::size_t a = 0; a < 2; ++a) {
+      EXPECT_NEAR(extrapolated[3 * d + a], disp[3 * d + a], 1e-12) << "particle " << d;
+    }
+  }
+  EXPECT_GT(behind_the_face, 0u);
+}
+
+TEST(QuadraticClamp, ConstrainedOperatorIsSymmetric) {
+  pd::Model m = pd::build_model(clamped_strip(pd::MirrorCoupling::quadratic));
+  const auto massless = pd::massless_dependants(m);
+  std::vector<std::size_t> dofs;
+  for (std::size_t i = 0; i < m.size(); ++i) {
+    if (!massless[i]) {
+      dofs.push_back(3 * i);
+      dofs.push_back(3 * i + 1);
+    }
+  }
+  const std::size_t n = dofs.size();
+  std::vector<double> k(n * n);
+  std::vector<double> u(3 * m.size()), ku(3 * m.size());
+  for (std::size_t col = 0; col < n; ++col) {
+    std::fill(u.begin(), u.end(), 0.0);
+    u[dofs[col]] = 1.0;
+    pd::apply_constrained_operator(m, u.data(), ku.data());
+    for (std::size_t row = 0; row < n; ++row) {
+      k[row * n + col] = ku[dofs[row]] * m.particles.volume[dofs[row] / 3];
+    }
+  }
+  double diff = 0, norm = 0;
+  for (std::size_t r = 0; r < n; ++r) {
+    for (std::size_t c = 0; c < n; ++c) {
+      diff += std::pow(k[r * n + c] - k[c * n + r], 2);
+      norm += k[r * n + c] * k[r * n + c];
+    }
+  }
+  EXPECT_LT(std::sqrt(diff / norm), 1e-12);
+}
+
+TEST(GhostLayers, LoadsAndSupportsSeeOnlyTheBody) {
+  pd::ModelSpec spec = box_spec(3, pd::VolumeCorrection::none, 3.0);
+  pd::LoadSpec load;
+  load.name = "everything";
+  load.load.region.boxes = {pd::Box{{-1, -1, -1}, {2, 2, 2}}}; // reaches the ghost sites too
+  load.load.kind = pd::BoxRegionLoad::Kind::total;
+  load.load.value = {0, 0, -1.0};
+  spec.loads = {load};
+  pd::Model m = pd::build_model(spec);
+  double total = 0;
+  for (std::size_t i = 0; i < m.size(); ++i) {
+    total += m.external_force_density[3 * i + 2] * m.particles.volume[i];
+    if (i >= m.body_particle_count()) {
+      EXPECT_EQ(m.external_force_density[3 * i + 2], 0.0);
+    }
+  }
+  EXPECT_NEAR(total, -1.0, 1e-12);
+}
+
+} // namespace
