@@ -235,6 +235,13 @@ double bulk_family_volume(const CorrectionSpec& spec) {
   const int dim = spec.dimension.dim;
   const double v = cell_volume(spec.dimension, lambda);
   double sum = 0;
+  if (spec.volume_correction == VolumeCorrection::gradient) {
+    // The `gradient` weights are far from 1 (the short bonds carry most): V0 must carry them.
+    for (const auto& orbit : gradient_matched_weights(spec).orbits) {
+      sum += v * static_cast<double>(orbit.count) * orbit.weight;
+    }
+    return sum;
+  }
   for_each_offset_within(
       spec.lattice.horizon_factor, dim, spec.horizon_rule, [&](const std::array<long long, 3>& o) {
         const Vec3 xi = offset_vector(o, lambda);
@@ -344,6 +351,24 @@ std::vector<double> volume_correction_factors(const CorrectionSpec& spec,
   const double lambda = spec.lattice.spacing;
   const int dim = spec.dimension.dim;
   std::vector<double> factor(family.directed_bond_count(), 1.0);
+  if (spec.volume_correction == VolumeCorrection::gradient) {
+    // One weight per orbit; bonds of a regular lattice are looked up by their offset's key.
+    const GradientWeights w = gradient_matched_weights(spec);
+    std::unordered_map<std::uint64_t, double> table;
+    for (const auto& orbit : w.orbits) {
+      table.emplace(offset_key(orbit.offset), orbit.weight);
+    }
+    for (std::size_t i = 0; i < particles.size(); ++i) {
+      for (std::size_t k = family.offsets[i]; k < family.offsets[i + 1]; ++k) {
+        const Vec3 xi = bond_vector(particles, i, family.neighbour[k]);
+        const auto it =
+            table.find(offset_key({std::llround(xi[0] / lambda), std::llround(xi[1] / lambda),
+                                   std::llround(xi[2] / lambda)}));
+        factor[k] = it != table.end() ? it->second : w.weight(xi, lambda);
+      }
+    }
+    return factor;
+  }
   if (spec.volume_correction == VolumeCorrection::moment) {
     const MomentWeights w = moment_matched_weights(spec);
     for (std::size_t i = 0; i < particles.size(); ++i) {

@@ -74,14 +74,27 @@ struct MaterialConstants {
 std::vector<MaterialConstants> material_constants(const ModelSpec& spec) {
   std::vector<MaterialConstants> out;
   const double delta = spec.lattice.horizon();
+  // s0 from G0 assumes uniform bond weights; `gradient` weights store `ratio` times the energy in
+  // the bonds crossing a plane, so s0/√ratio keeps the energy to break them all what the uniform
+  // lattice releases (G0 up to the lattice quadrature of eq. 11's integral). Explicit s0 stays.
+  double stretch_scale = 1.0;
+  for (const Material& m : spec.materials) {
+    if (!m.critical_stretch && m.fracture_energy &&
+        spec.volume_correction == VolumeCorrection::gradient) {
+      stretch_scale = 1.0 / std::sqrt(fracture_energy_weight_ratio(spec.corrections()));
+      break;
+    }
+  }
   for (const Material& m : spec.materials) {
     MaterialConstants k;
     k.c = micromodulus(spec.dimension, m.youngs_modulus, delta) * m.stiffness_factor;
     if (m.critical_stretch) {
       k.critical_stretch = *m.critical_stretch;
     } else if (m.fracture_energy) {
-      k.critical_stretch = critical_stretch_from_fracture_energy(
-          spec.dimension, m.youngs_modulus * m.stiffness_factor, delta, *m.fracture_energy);
+      k.critical_stretch =
+          stretch_scale *
+          critical_stretch_from_fracture_energy(
+              spec.dimension, m.youngs_modulus * m.stiffness_factor, delta, *m.fracture_energy);
     }
     if (m.yield_stretch) {
       k.yield_stretch = *m.yield_stretch;

@@ -6,9 +6,13 @@
 
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <gtest/gtest.h>
 #include <numbers>
+#include <stdexcept>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace {
 
@@ -396,10 +400,14 @@ TEST(TensorCorrection, BulkFactorIsOneWithMomentWeights) {
   // 14³ cells, δ = 3.015: the centre particle and all its neighbours are farther than δ from
   // every face, so every factor of the centre's bonds is exactly 1 (moment weights match the
   // continuum 4th moments, which is all the bulk row sums need).
-  for (const double m : {3.015, 2.0 * std::numbers::sqrt3}) {
+  // The same with `gradient` weights, which match the same moments.
+  for (const auto& [m, vc] :
+       {std::pair{3.015, pd::VolumeCorrection::moment},
+        std::pair{2.0 * std::numbers::sqrt3, pd::VolumeCorrection::moment},
+        std::pair{2.0 * std::numbers::sqrt3, pd::VolumeCorrection::gradient}}) {
     pd::ModelSpec spec = block_spec(3, m, {14, 14, 14});
     spec.surface_correction = pd::SurfaceCorrection::tensor;
-    spec.volume_correction = pd::VolumeCorrection::moment;
+    spec.volume_correction = vc;
     const Built b = build(spec);
     const std::size_t centre = particle_at(b.particles, {7.5, 7.5, 7.5});
     const auto vf = pd::volume_correction_factors(spec.corrections(), b.particles, b.family);
@@ -527,6 +535,291 @@ TEST(TensorCorrection, OneLayerPlateKeepsPositiveFactors) {
   }
 }
 
+// ---- `gradient` weights -----------------------------------------------------------------------
+
+using Tensor2 = std::array<std::array<double, 3>, 3>;
+
+/// Isotropic elastic tensor of the bond-based model from its Lamé constants (3D: λ_L = μ = 2E/5;
+/// 2D in-plane: plane stress E/(1−ν²)-based with ν = 1/3, plane strain ν = 1/4; 1D: C = E), not
+/// from the moments the weights are built on.
+double contract(const pd::ModelDimension& d, double E, const Tensor2& a, const Tensor2& b) {
+  if (d.dim == 1) {
+    return E * a[0][0] * b[0][0];
+  }
+  double lame = 0.4 * E, mu = 0.4 * E; // 3D and plane strain, ν = 1/4
+  if (d.dim == 2 && d.plane == pd::PlaneMode::plane_stress) {
+    lame = mu = 3.0 / 8.0 * E; // νE/(1−ν²) and E/(2(1+ν)) at ν = 1/3
+  }
+  double tra = 0, trb = 0, ab = 0;
+  for (std::size_t i = 0; i < 3; ++i) {
+    tra += a[i][i];
+    trb += b[i][i];
+    for (std::size_t j = 0; j < 3; ++j) {
+      ab += a[i][j] * b[i][j];
+    }
+  }
+  return lame * tra * trb + 2.0 * mu * ab;
+}
+
+/// The strain-gradient fields G_d of the `gradient` equations (depth axis d = dim − 1).
+std::vector<Tensor2> gradient_fields(int dim) {
+  const Tensor2 shear{{{0, 1, 0}, {1, 0, 0}, {0, 0, 0}}};
+  if (dim == 1) {
+    return {Tensor2{{{1, 0, 0}, {0, 0, 0}, {0, 0, 0}}}};
+  }
+  if (dim == 2) {
+    return {Tensor2{{{1, 0, 0}, {0, -1.0 / 3.0, 0}, {0, 0, 0}}}, shear};
+  }
+  return {Tensor2{{{1, 0, 0}, {0, -0.25, 0}, {0, 0, -0.25}}},
+          Tensor2{{{1, 0, 0}, {0, 0, 0}, {0, 0, -1.0 / 3.0}}}, shear};
+}
+
+pd::CorrectionSpec gradient_spec(int dim, pd::PlaneMode plane, double m, double lambda) {
+  pd::CorrectionSpec spec{};
+  spec.dimension.dim = dim;
+  spec.dimension.plane = plane;
+  spec.lattice.spacing = lambda;
+  spec.lattice.horizon_factor = m;
+  spec.volume_correction = pd::VolumeCorrection::gradient;
+  return spec;
+}
+
+TEST(GradientWeights, MatchMomentsAndCellGradientEnergy) {
+  // Every lattice offset within the horizon, written out here; the targets are the closed-form
+  // continuum moments (as for `moment`) and (λ²/24) G:C:G with C from the Lamé constants and c
+  // from material.cpp: (c/16) Σ w V |ξ|³ (n_d n·G·n)² must equal it for every field.
+  // Only 3D has such weights (NoSolutionInOneOrTwoDimensions); the sums are written for any dim.
+  const double E = 1.0;
+  for (int dim : {3}) {
+    for (const auto plane : {pd::PlaneMode::plane_stress}) {
+      for (double m : {3.015, 2.0 * std::sqrt(3.0), 4.0}) {
+        const double lambda = 0.1, delta = m * lambda;
+        const auto spec = gradient_spec(dim, plane, m, lambda);
+        const pd::GradientWeights w = pd::gradient_matched_weights(spec);
+        EXPECT_LT(w.residual, 1e-10);
+        const double c = pd::micromodulus(spec.dimension, E, delta);
+        const double v = dim == 3 ? lambda * lambda * lambda : lambda * lambda;
+        const auto fields = gradient_fields(dim);
+        std::vector<double> grad(fields.size(), 0.0);
+        double s4 = 0, s22 = 0;
+        const int r = static_cast<int>(std::ceil(m));
+        for (int k = (dim == 3 ? -r : 0); k <= (dim == 3 ? r : 0); ++k) {
+          for (int j = -r; j <= r; ++j) {
+            for (int i = -r; i <= r; ++i) {
+              const double len = lambda * std::sqrt(double(i * i + j * j + k * k));
+              if (len == 0 || len > delta * (1 + 1e-9)) {
+                continue;
+              }
+              const pd::Vec3 xi{i * lambda, j * lambda, k * lambda};
+              const double weight = w.weight(xi, lambda);
+              ASSERT_GE(weight, 0.0);
+              const pd::Vec3 n{xi[0] / len, xi[1] / len, xi[2] / len};
+              s4 += weight * v * len * std::pow(n[0], 4);
+              s22 += weight * v * len * n[0] * n[0] * n[1] * n[1];
+              for (std::size_t f = 0; f < fields.size(); ++f) {
+                double ngn = 0;
+                for (std::size_t a = 0; a < 3; ++a) {
+                  for (std::size_t b = 0; b < 3; ++b) {
+                    ngn += n[a] * fields[f][a][b] * n[b];
+                  }
+                }
+                const double p = n[static_cast<std::size_t>(dim - 1)] * ngn;
+                grad[f] += weight * v * len * len * len * p * p;
+              }
+            }
+          }
+        }
+        const double c4 = dim == 3 ? std::pow(delta, 4) / 4 * 4 * pi / 5
+                                   : std::pow(delta, 3) / 3 * 2 * pi * 3 / 8;
+        EXPECT_NEAR(s4 / c4, 1.0, 1e-10) << "dim " << dim << " m " << m;
+        EXPECT_NEAR(s22 / (c4 / 3), 1.0, 1e-10) << "dim " << dim << " m " << m;
+        for (std::size_t f = 0; f < fields.size(); ++f) {
+          const double cell =
+              lambda * lambda / 24.0 * contract(spec.dimension, E, fields[f], fields[f]);
+          EXPECT_NEAR(c / 16.0 * grad[f] / cell, 1.0, 1e-10)
+              << "dim " << dim << " m " << m << " field " << f;
+        }
+      }
+    }
+  }
+}
+
+TEST(GradientWeights, ReferenceSolutionAtTwoRootThree) {
+  // The non-negative minimum-deviation solution in 3D at m = 2√3, computed independently with
+  // scipy (weights multiply the full cell volume, as the factors here): ≈ 10.05, 14.2, 6.53, 5.03
+  // on the four shortest orbits and 0 beyond.
+  const auto w = pd::gradient_matched_weights(
+      gradient_spec(3, pd::PlaneMode::plane_stress, 2.0 * std::sqrt(3.0), 1.0));
+  ASSERT_GE(w.orbits.size(), 5u);
+  const std::array<double, 4> expected{10.05, 14.2, 6.53, 5.03};
+  for (std::size_t o = 0; o < expected.size(); ++o) {
+    EXPECT_NEAR(w.orbits[o].weight / expected[o], 1.0, 0.005) << "orbit " << o;
+  }
+  for (std::size_t o = expected.size(); o < w.orbits.size(); ++o) {
+    EXPECT_LT(w.orbits[o].weight, 1e-9 * w.uniform) << "orbit " << o;
+  }
+}
+
+TEST(GradientWeights, NoSolutionInOneOrTwoDimensions) {
+  // 1D: Σ w|ξ|³ ≥ λ² Σ w|ξ| for w ≥ 0, but the cell needs Σ w|ξ|³ = λ² Σ w|ξ|/3.
+  // 2D: the shear-gradient equation needs Σ w|ξ|³ n_x²n_y² = (2/3)λ² Σ w|ξ| n_x²n_y², but every
+  // bond with n_x n_y ≠ 0 has |ξ|² ≥ 2λ². Both are 3 times off for the shortest bonds; no
+  // horizon helps, plane stress and plane strain alike.
+  for (int dim : {1, 2}) {
+    for (const auto plane : {pd::PlaneMode::plane_stress, pd::PlaneMode::plane_strain}) {
+      for (double m : {3.015, 2.0 * std::sqrt(3.0), 4.0}) {
+        try {
+          (void)pd::gradient_matched_weights(gradient_spec(dim, plane, m, 0.1));
+          ADD_FAILURE() << dim << "D gradient weights should not exist at m " << m;
+        } catch (const std::runtime_error& e) {
+          char words[64];
+          std::snprintf(words, sizeof words, "horizon_factor %.6g", m);
+          EXPECT_NE(std::string(e.what()).find(words), std::string::npos) << e.what();
+        }
+      }
+    }
+  }
+}
+
+TEST(GradientWeights, JitteredBondsTakeTheirRoundedOrbit) {
+  // λ = 0.5, m = 3.015: a bond near (−1, 0, 2)λ takes the weight of the orbit (0, 1, 2), one
+  // near (1, 1, 3)λ (|o|² = 11, outside the family) the mean weight of the nearest shell by
+  // length, |o| = 3: (0, 0, 3) and (1, 2, 2).
+  const double lambda = 0.5;
+  const auto w =
+      pd::gradient_matched_weights(gradient_spec(3, pd::PlaneMode::plane_stress, 3.015, lambda));
+  const auto orbit = [&](std::array<long long, 3> o) {
+    for (const auto& e : w.orbits) {
+      if (e.offset == o) {
+        return e;
+      }
+    }
+    ADD_FAILURE() << "no orbit " << o[0] << o[1] << o[2];
+    return pd::GradientWeights::Orbit{};
+  };
+  EXPECT_EQ(w.weight({-1.1 * lambda, 0.2 * lambda, 1.9 * lambda}, lambda), orbit({0, 1, 2}).weight);
+  EXPECT_EQ(w.weight({0.1 * lambda, -0.9 * lambda, 0.3 * lambda}, lambda), orbit({0, 0, 1}).weight);
+  const auto a = orbit({0, 0, 3}), b = orbit({1, 2, 2});
+  EXPECT_NEAR(w.weight({1.45 * lambda, 1.45 * lambda, 2.55 * lambda}, lambda),
+              (double(a.count) * a.weight + double(b.count) * b.weight) / double(a.count + b.count),
+              1e-15);
+}
+
+/// Linearised bond stretch (u_j − u_i)·ξ/|ξ|² of the displacement field u.
+template <class Field>
+double linear_stretch(const pd::Vec3& xi_pos, const pd::Vec3& xj_pos, Field u) {
+  const pd::Vec3 ui = u(xi_pos), uj = u(xj_pos);
+  double num = 0, len2 = 0;
+  for (std::size_t a = 0; a < 3; ++a) {
+    const double d = xj_pos[a] - xi_pos[a];
+    num += (uj[a] - ui[a]) * d;
+    len2 += d * d;
+  }
+  return num / len2;
+}
+
+TEST(GradientWeights, CentreParticleStoresTheCellEnergy) {
+  // 12³ block, m = 2√3: the centre particle's energy density ¼ Σ_k k_ij |ξ| s² (k_ij the model's
+  // bond stiffness c V_j w) for a uniform strain is ½ ε:C:ε, and for the quadratic beam-bending
+  // field u = (x z', −ν y z', −x²/2 − ν(z'² − y²)/2), z' = z − 4, it is the cell average of
+  // ½ ε:C:ε: ½ ε(x_i):C:ε(x_i) + (λ²/24) G:C:G.
+  const double E = 200e9, lambda = 1.0;
+  pd::ModelSpec spec = block_spec(3, 2.0 * std::sqrt(3.0), {12, 12, 12});
+  spec.volume_correction = pd::VolumeCorrection::gradient;
+  const pd::Model model = pd::build_model(spec);
+  const std::size_t i = particle_at(model.particles, {5.5, 5.5, 5.5});
+  const auto energy = [&](auto u) {
+    double w = 0;
+    for (std::size_t k = model.family.offsets[i]; k < model.family.offsets[i + 1]; ++k) {
+      const std::size_t j = model.family.neighbour[k];
+      const double s = linear_stretch(model.particles.position[i], model.particles.position[j], u);
+      w += 0.25 * model.field.bond_stiffness[k] / model.family.inverse_length[k] * s * s;
+    }
+    return w;
+  };
+  const Tensor2 eps{{{1e-3, 2e-4, -3e-4}, {2e-4, -5e-4, 4e-4}, {-3e-4, 4e-4, 7e-4}}};
+  const double uniform = energy([&](const pd::Vec3& x) {
+    pd::Vec3 u{0, 0, 0};
+    for (std::size_t a = 0; a < 3; ++a) {
+      for (std::size_t b = 0; b < 3; ++b) {
+        u[a] += eps[a][b] * x[b];
+      }
+    }
+    return u;
+  });
+  EXPECT_NEAR(uniform / (0.5 * contract(spec.dimension, E, eps, eps)), 1.0, 1e-10);
+  const double nu = 0.25, kappa = 1e-4, z0 = 4.0;
+  const double bending = energy([&](const pd::Vec3& x) {
+    const double z = x[2] - z0;
+    return pd::Vec3{kappa * x[0] * z, -nu * kappa * x[1] * z,
+                    kappa * (-0.5 * x[0] * x[0] - 0.5 * nu * (z * z - x[1] * x[1]))};
+  });
+  const double zi = model.particles.position[i][2] - z0;
+  const Tensor2 centre{{{kappa * zi, 0, 0}, {0, -nu * kappa * zi, 0}, {0, 0, -nu * kappa * zi}}};
+  const Tensor2 g{{{kappa, 0, 0}, {0, -nu * kappa, 0}, {0, 0, -nu * kappa}}};
+  const double cell = 0.5 * contract(spec.dimension, E, centre, centre) +
+                      lambda * lambda / 24.0 * contract(spec.dimension, E, g, g);
+  EXPECT_NEAR(bending / cell, 1.0, 1e-10);
+}
+
+TEST(GradientWeights, FractureRatioMatchesABruteForceCount) {
+  // Energy per unit area to break every bond crossing the plane z = 6 of a 12³ block (m = 2√3),
+  // counted over the bonds of the centre column: ½ k_ij V_i s0² |ξ| per bond, over λ². With
+  // `gradient` weights and s0 scaled by 1/√ratio it is what the unweighted lattice (`none`)
+  // releases with the unscaled s0: G0 times the lattice's quadrature of ∫_{ξ_z>0} ξ_z |ξ| dV =
+  // πδ⁵/5 (the s0 of eq. 11 is calibrated to the integral), 1.0206 at m = 2√3.
+  const double g0 = 100.0, m = 2.0 * std::sqrt(3.0);
+  const auto released = [&](pd::VolumeCorrection vc) {
+    pd::ModelSpec spec = block_spec(3, m, {12, 12, 12});
+    spec.materials[0].fracture_energy = g0;
+    spec.effects.damage = true;
+    spec.volume_correction = vc;
+    const pd::Model model = pd::build_model(spec);
+    double sum = 0;
+    for (std::size_t i = 0; i < model.size(); ++i) {
+      const pd::Vec3& x = model.particles.position[i];
+      if (std::abs(x[0] - 5.5) > 1e-9 || std::abs(x[1] - 5.5) > 1e-9 || x[2] > 6) {
+        continue;
+      }
+      for (std::size_t k = model.family.offsets[i]; k < model.family.offsets[i + 1]; ++k) {
+        const std::size_t j = model.family.neighbour[k];
+        if (model.particles.position[j][2] < 6) {
+          continue;
+        }
+        // `none` has a uniform field (one stiffness, one s0), `gradient` a per-bond one.
+        const bool per_bond = model.field.per_bond();
+        const double s0 =
+            per_bond ? model.field.bond_critical_stretch[k] : model.field.critical_stretch;
+        const double stiffness = per_bond ? model.field.bond_stiffness[k] : model.field.stiffness;
+        sum +=
+            0.5 * stiffness * model.particles.volume[i] * s0 * s0 / model.family.inverse_length[k];
+      }
+    }
+    return sum;
+  };
+  const pd::CorrectionSpec spec = gradient_spec(3, pd::PlaneMode::plane_stress, m, 1.0);
+  const double ratio = pd::fracture_energy_weight_ratio(spec);
+  // Brute-force ratio over the lattice offsets with ξ_z > 0.
+  const auto w = pd::gradient_matched_weights(spec);
+  double weighted = 0, plain = 0;
+  for (int k = 1; k <= 4; ++k) {
+    for (int j = -4; j <= 4; ++j) {
+      for (int i = -4; i <= 4; ++i) {
+        const double len = std::sqrt(double(i * i + j * j + k * k));
+        if (len <= m * (1 + 1e-9)) {
+          weighted += w.weight({double(i), double(j), double(k)}, 1.0) * k * len;
+          plain += k * len;
+        }
+      }
+    }
+  }
+  EXPECT_NEAR(ratio, weighted / plain, 1e-12);
+  EXPECT_NEAR(released(pd::VolumeCorrection::gradient) / released(pd::VolumeCorrection::none), 1.0,
+              1e-10);
+  EXPECT_NEAR(released(pd::VolumeCorrection::gradient) / g0, plain / (pi * std::pow(m, 5) / 5),
+              1e-10);
+}
+
 // ---- scene keys -------------------------------------------------------------------------------
 
 constexpr const char* minimal = R"(dimension: 1
@@ -565,6 +858,9 @@ TEST(CorrectionScene, UnknownValuesAreRejectedWithPosition) {
       "t.yaml");
   EXPECT_EQ(t.model.surface_correction, pd::SurfaceCorrection::tensor);
   EXPECT_EQ(t.model.volume_correction, pd::VolumeCorrection::moment);
+  const pd::Scene u =
+      pd::parse_scene(std::string(minimal) + "model:\n  volume_correction: gradient\n", "u.yaml");
+  EXPECT_EQ(u.model.volume_correction, pd::VolumeCorrection::gradient);
 }
 
 } // namespace

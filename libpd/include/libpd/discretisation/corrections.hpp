@@ -24,8 +24,8 @@ namespace pd {
 enum class SurfaceCorrection { none, volume, energy, macek_silling, tensor, ghost };
 /// Quadrature weights of the bonds: partial-volume corrections of neighbour cells cut by the
 /// horizon (`linear`, `exact`), or lattice weights that reproduce the continuum's fourth moments
-/// (`moment`, see corrections.hpp).
-enum class VolumeCorrection { none, linear, exact, moment };
+/// (`moment`) and also its strain-gradient energy (`gradient`), see below.
+enum class VolumeCorrection { none, linear, exact, moment, gradient };
 
 template <>
 struct EnumName<SurfaceCorrection> {
@@ -43,11 +43,13 @@ struct EnumName<SurfaceCorrection> {
 
 template <>
 struct EnumName<VolumeCorrection> {
-  static constexpr NameTable<VolumeCorrection, 4> table{{
+  static constexpr NameTable<VolumeCorrection, 5> table{{
       {"none", VolumeCorrection::none, "full neighbour volumes"},
       {"linear", VolumeCorrection::linear, "partial volume of cut cells, linear in the distance"},
       {"exact", VolumeCorrection::exact, "partial volume of cut cells, exact"},
       {"moment", VolumeCorrection::moment, "moment-matched lattice weights"},
+      {"gradient", VolumeCorrection::gradient,
+       "lattice weights matching the 4th moments and the strain-gradient energy of a cell"},
   }};
 };
 
@@ -159,6 +161,42 @@ struct MomentWeights {
   double weight(const Vec3& xi) const { return alpha + beta * cubic_invariant(xi); }
 };
 MomentWeights moment_matched_weights(const CorrectionSpec& spec);
+
+/// Gradient-matched bond weights (`volume_correction: gradient`): one non-negative weight per
+/// orbit of lattice offsets under the cube's symmetry group, such that over a bulk family
+///  * the weighted 4th moments are the continuum's (as `moment`), and
+///  * for a quadratic displacement field the particle's energy density beyond its centre value,
+///    (c/16) Σ w V |ξ|³ (Σ n_a n_b n_c ∂_c ε_ab)², equals what its own cell holds when the strain
+///    varies linearly across it, (λ²/24) Σ_c ∂_c ε : C : ∂_c ε, for bending and twist fields
+///    (gradient_weights.cpp lists them);
+/// and, among such weights, the closest to uniform (least Σ_orbits N_o (w_o − w̄)²).
+/// The weights concentrate the stiffness on the shortest bonds (3D, m = 3.015, 2√3, 4: only the
+/// orbits with |o|² ≤ 4 carry weight).
+/// Throws std::runtime_error when no non-negative solution exists, which is always the case in
+/// 1D and 2D: there the shortest bonds that feel the gradient already hold 3 times the cell's
+/// gradient energy per unit of the matched moment (gradient_weights.cpp).
+struct GradientWeights {
+  struct Orbit {
+    std::array<long long, 3> offset; ///< representative: sorted |components|, e.g. (0, 0, 1)
+    std::size_t count = 0;           ///< N_o, offsets of the bulk family in the orbit
+    double weight = 0;               ///< w_o
+  };
+  std::vector<Orbit> orbits; ///< by |o|², then by representative
+  double uniform = 1;        ///< w̄: the uniform weight that matches the uniaxial 4th moment
+  double residual = 0;       ///< largest relative residual of the equations
+  /// Weight of a bond ξ: that of the orbit of round(ξ/λ). A bond that rounds to an offset outside
+  /// the table (jittered particles near the horizon) takes the count-weighted mean weight of the
+  /// shell of orbits whose |o| is nearest to |ξ|/λ (the outermost shell: weight 0 in 3D so far).
+  double weight(const Vec3& xi, double spacing) const;
+};
+GradientWeights gradient_matched_weights(const CorrectionSpec& spec);
+
+/// How much more energy the weighted bonds crossing a plane store than unweighted ones at the
+/// same stretch: Σ_{ξ_n > 0} w ξ_n |ξ| / Σ_{ξ_n > 0} ξ_n |ξ| over the bulk-lattice offsets, n the
+/// last active axis and w the bulk weight of spec.volume_correction (1 for `none`). The critical
+/// stretch derived from a fracture energy assumes uniform weights; dividing it by √ratio keeps the
+/// energy to break all bonds crossing a plane (model.cpp).
+double fracture_energy_weight_ratio(const CorrectionSpec& spec);
 
 /// The product of the surface and volume correction factors for every directed bond, in CSR
 /// order. All ones when both corrections are `none`.

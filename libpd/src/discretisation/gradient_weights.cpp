@@ -1,0 +1,368 @@
+// `volume_correction: gradient`: lattice weights per offset orbit that match the continuum's
+// fourth moments and a cell's strain-gradient energy (declared in corrections.hpp; a file of its
+// own only to keep corrections.cpp within the layout's size limit).
+#include "libpd/discretisation/corrections.hpp"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <stdexcept>
+#include <utility>
+
+namespace pd {
+
+// ---- `gradient` weights ------------------------------------------------------------------------
+//
+// Unknowns: one weight w_o per orbit o of lattice offsets under the cube's symmetry group (signs
+// and permutations of the components). Equations over a bulk family (V the cell volume, U the
+// uniaxial moment ∫_H n_x⁴ |ξ| dV):
+//  * 4th moments, as `moment`: Σ w V |ξ| n_x⁴ = U and (2D, 3D) Σ w V |ξ| n_x²n_y² = U/3.
+//  * strain gradient: for a quadratic displacement the stretch of bond ξ is n·ε(x + ξ/2)·n, so the
+//    particle's energy density ¼ c Σ w V |ξ| s² holds, beyond its centre value (the odd terms
+//    cancel), (c/16) Σ w V |ξ|³ P(n)² with P(n) = Σ_abc n_a n_b n_c G_cab, G_cab = ∂_c ε_ab. The
+//    particle's own cell, over which ε varies linearly, holds (λ²/24) Σ_c G_c : C : G_c beyond
+//    its centre value. C is the bond-based model's isotropic tensor, (c/2) ∫ |ξ| n⊗n⊗n⊗n dV =
+//    (M/3)(δδ + δδ + δδ) with M = cU/2 (1D: C = E = M), so G:C:G = (M/3)((tr G)² + 2 G:G) and
+//    the equation reads Σ w V |ξ|³ P(n)² = (λ²U/9)((tr G)² + 2 G:G), free of c and E.
+//    Fields, only G_d non-zero for the depth axis d = dim − 1 (so P(n) = n_d (n·G_d·n)):
+//      3D (ν = 1/4): beam bending diag(1, −ν, −ν), plate bending diag(1, 0, −ν/(1−ν)), twist
+//                    xy = yx = 1;
+//      2D: bending diag(1, −1/3) (the in-plane Poisson ratio of the model, plane stress and
+//          plane strain alike: C_xxyy/C_yyyy = 1/3), shear xy = yx = 1;
+//      1D: ∂_x ε_xx = 1.
+// Plane stress and plane strain thus get the same weights (their C differ by a factor only).
+// Among the non-negative solutions we take the one closest to uniform weights in the sense of
+// min Σ_o N_o (w_o − w̄)²: a Lawson–Hanson NNLS first proves that one exists (least residual of
+// A w = b over w ≥ 0), a second NNLS on the penalised system [√big·A; diag(√N)] finds the zero
+// set, and the exact equality-constrained problem on the remaining orbits (KKT: w_F = w̄ +
+// A_Fᵀν/N) gives weights that satisfy the equations to round-off; the zero set is corrected
+// until the KKT conditions hold (w_F ≥ 0, multipliers of the zero weights ≥ 0).
+
+namespace {
+
+/// Bond vector λ·o of a lattice offset o.
+Vec3 offset_vector(const std::array<long long, 3>& o, double lambda) {
+  return {lambda * static_cast<double>(o[0]), lambda * static_cast<double>(o[1]),
+          lambda * static_cast<double>(o[2])};
+}
+
+using Matrix = Eigen::MatrixXd;
+using Vector = Eigen::VectorXd;
+
+std::array<long long, 3> orbit_representative(std::array<long long, 3> o) {
+  for (auto& v : o) {
+    v = v < 0 ? -v : v;
+  }
+  std::sort(o.begin(), o.end());
+  return o;
+}
+
+/// Lawson–Hanson non-negative least squares: argmin ||a x − b|| over x ≥ 0.
+Vector nnls(const Matrix& a, const Vector& b) {
+  const Eigen::Index n = a.cols();
+  Vector x = Vector::Zero(n);
+  std::vector<bool> passive(static_cast<std::size_t>(n), false);
+  const double tol = 1e-14 * a.norm() * std::max(1.0, b.norm());
+  for (Eigen::Index outer = 0; outer < 3 * n + 10; ++outer) {
+    const Vector grad = a.transpose() * (b - a * x);
+    Eigen::Index add = -1;
+    for (Eigen::Index i = 0; i < n; ++i) {
+      if (!passive[static_cast<std::size_t>(i)] && grad[i] > tol &&
+          (add < 0 || grad[i] > grad[add])) {
+        add = i;
+      }
+    }
+    if (add < 0) {
+      break;
+    }
+    passive[static_cast<std::size_t>(add)] = true;
+    for (Eigen::Index inner = 0; inner < 3 * n + 10; ++inner) {
+      std::vector<Eigen::Index> cols;
+      for (Eigen::Index i = 0; i < n; ++i) {
+        if (passive[static_cast<std::size_t>(i)]) {
+          cols.push_back(i);
+        }
+      }
+      Matrix ap(a.rows(), static_cast<Eigen::Index>(cols.size()));
+      for (std::size_t c = 0; c < cols.size(); ++c) {
+        ap.col(static_cast<Eigen::Index>(c)) = a.col(cols[c]);
+      }
+      const Vector zp = ap.colPivHouseholderQr().solve(b);
+      Vector z = Vector::Zero(n);
+      double step = 1.0;
+      for (std::size_t c = 0; c < cols.size(); ++c) {
+        const Eigen::Index i = cols[c];
+        z[i] = zp[static_cast<Eigen::Index>(c)];
+        if (z[i] <= 0) {
+          step = std::min(step, x[i] / (x[i] - z[i]));
+        }
+      }
+      x += step * (z - x);
+      if (step >= 1.0) {
+        break;
+      }
+      for (const Eigen::Index i : cols) {
+        if (x[i] <= 1e-15 * x.lpNorm<Eigen::Infinity>()) {
+          x[i] = 0;
+          passive[static_cast<std::size_t>(i)] = false;
+        }
+      }
+    }
+  }
+  return x;
+}
+
+using Tensor2 = std::array<std::array<double, 3>, 3>;
+
+/// The strain-gradient fields G_d (d = dim − 1 the depth axis) of the `gradient` equations.
+std::vector<Tensor2> gradient_fields(int dim) {
+  if (dim == 1) {
+    return {Tensor2{{{1, 0, 0}, {0, 0, 0}, {0, 0, 0}}}};
+  }
+  const Tensor2 shear{{{0, 1, 0}, {1, 0, 0}, {0, 0, 0}}};
+  if (dim == 2) {
+    return {Tensor2{{{1, 0, 0}, {0, -1.0 / 3.0, 0}, {0, 0, 0}}}, shear};
+  }
+  const double nu = 0.25;
+  return {Tensor2{{{1, 0, 0}, {0, -nu, 0}, {0, 0, -nu}}},
+          Tensor2{{{1, 0, 0}, {0, 0, 0}, {0, 0, -nu / (1 - nu)}}}, shear};
+}
+
+/// The equations A w = b of the `gradient` weights, one column per orbit, rows scaled to b = 1.
+struct GradientSystem {
+  std::vector<GradientWeights::Orbit> orbits;
+  Matrix a;
+  Vector count;
+  double uniform = 1;
+};
+
+GradientSystem gradient_system(const CorrectionSpec& spec) {
+  const double lambda = spec.lattice.spacing;
+  const double delta = spec.lattice.horizon();
+  const int dim = spec.dimension.dim;
+  const auto depth = static_cast<std::size_t>(dim - 1);
+  const double v = cell_volume(spec.dimension, lambda);
+  const double u = uniaxial_energy_moment(spec.dimension, delta);
+  const auto fields = gradient_fields(dim);
+  std::vector<double> rhs{u};
+  if (dim > 1) {
+    rhs.push_back(u / 3.0);
+  }
+  for (const Tensor2& g : fields) {
+    double trace = 0, gg = 0;
+    for (std::size_t a = 0; a < 3; ++a) {
+      trace += g[a][a];
+      for (std::size_t b = 0; b < 3; ++b) {
+        gg += g[a][b] * g[a][b];
+      }
+    }
+    rhs.push_back(lambda * lambda * u / 9.0 * (trace * trace + 2.0 * gg));
+  }
+  // Orbits and their column sums, in the order of |o|², then representative.
+  std::map<std::pair<long long, std::array<long long, 3>>, std::vector<double>> columns;
+  std::map<std::pair<long long, std::array<long long, 3>>, std::size_t> counts;
+  for_each_offset_within(
+      spec.lattice.horizon_factor, dim, spec.horizon_rule, [&](const std::array<long long, 3>& o) {
+        const auto rep = orbit_representative(o);
+        const std::pair key{rep[0] * rep[0] + rep[1] * rep[1] + rep[2] * rep[2], rep};
+        auto& col = columns[key];
+        col.resize(rhs.size(), 0.0);
+        ++counts[key];
+        const Vec3 xi = offset_vector(o, lambda);
+        const double r = norm(xi);
+        const Vec3 n{xi[0] / r, xi[1] / r, xi[2] / r};
+        std::size_t row = 0;
+        col[row++] += v * r * n[0] * n[0] * n[0] * n[0];
+        if (dim > 1) {
+          col[row++] += v * r * n[0] * n[0] * n[1] * n[1];
+        }
+        for (const Tensor2& g : fields) {
+          double ngn = 0;
+          for (std::size_t a = 0; a < 3; ++a) {
+            for (std::size_t b = 0; b < 3; ++b) {
+              ngn += n[a] * g[a][b] * n[b];
+            }
+          }
+          const double p = n[depth] * ngn;
+          col[row++] += v * r * r * r * p * p;
+        }
+      });
+  GradientSystem s;
+  const auto rows = static_cast<Eigen::Index>(rhs.size());
+  s.a.resize(rows, static_cast<Eigen::Index>(columns.size()));
+  s.count.resize(static_cast<Eigen::Index>(columns.size()));
+  double moment = 0;
+  Eigen::Index c = 0;
+  for (const auto& [key, col] : columns) {
+    s.orbits.push_back({key.second, counts[key], 0.0});
+    s.count[c] = static_cast<double>(counts[key]);
+    for (Eigen::Index r = 0; r < rows; ++r) {
+      s.a(r, c) = col[static_cast<std::size_t>(r)] / rhs[static_cast<std::size_t>(r)];
+    }
+    moment += s.a(0, c);
+    ++c;
+  }
+  s.uniform = 1.0 / moment;
+  return s;
+}
+
+/// min Σ N_o (w_o − w̄)² subject to A w = b (b = 1), w ≥ 0, from the zero set `zero`: exact KKT
+/// solve on the free orbits, moving one orbit at a time between the sets until KKT holds.
+Vector closest_to_uniform(const GradientSystem& s, std::vector<bool> zero) {
+  const Eigen::Index n = s.a.cols();
+  const Vector b = Vector::Ones(s.a.rows());
+  const Vector wbar = Vector::Constant(n, s.uniform);
+  for (int iteration = 0; iteration < 4 * n + 20; ++iteration) {
+    Matrix af = s.a;
+    Vector inv_n = s.count.cwiseInverse();
+    for (Eigen::Index i = 0; i < n; ++i) {
+      if (zero[static_cast<std::size_t>(i)]) {
+        af.col(i).setZero();
+        inv_n[i] = 0;
+      }
+    }
+    const Matrix k = af * inv_n.asDiagonal() * af.transpose();
+    const Vector nu = k.completeOrthogonalDecomposition().solve(b - af * wbar);
+    const Vector atnu = s.a.transpose() * nu;
+    Vector w = Vector::Zero(n);
+    Eigen::Index worst_free = -1, worst_zero = -1;
+    double most_negative = 0, lowest_multiplier = 0;
+    for (Eigen::Index i = 0; i < n; ++i) {
+      if (!zero[static_cast<std::size_t>(i)]) {
+        w[i] = wbar[i] + atnu[i] / s.count[i];
+        if (w[i] < most_negative) {
+          most_negative = w[i];
+          worst_free = i;
+        }
+      } else {
+        const double multiplier = (-s.count[i] * wbar[i] - atnu[i]) / s.count[i];
+        if (multiplier < lowest_multiplier) {
+          lowest_multiplier = multiplier;
+          worst_zero = i;
+        }
+      }
+    }
+    const double tol = 1e-12 * s.uniform;
+    if (worst_free >= 0 && most_negative < -tol) {
+      zero[static_cast<std::size_t>(worst_free)] = true;
+    } else if (worst_zero >= 0 && lowest_multiplier < -tol) {
+      zero[static_cast<std::size_t>(worst_zero)] = false;
+    } else {
+      return w.cwiseMax(0.0);
+    }
+  }
+  throw std::logic_error("gradient weights: the active-set iteration did not converge");
+}
+
+} // namespace
+
+GradientWeights gradient_matched_weights(const CorrectionSpec& spec) {
+  const GradientSystem s = gradient_system(spec);
+  const Eigen::Index n = s.a.cols();
+  const Vector b = Vector::Ones(s.a.rows());
+  const Vector feasible = nnls(s.a, b);
+  const double least = (s.a * feasible - b).lpNorm<Eigen::Infinity>();
+  if (!(least <= 1e-9)) {
+    char text[256];
+    std::snprintf(text, sizeof text,
+                  "volume_correction gradient: no non-negative lattice weights meet the moment "
+                  "and strain-gradient equations at horizon_factor %.6g in %dD (least relative "
+                  "residual %.3g)",
+                  spec.lattice.horizon_factor, spec.dimension.dim, least);
+    throw std::runtime_error(text);
+  }
+  const double big = 1e8;
+  Matrix stacked(s.a.rows() + n, n);
+  Vector target(s.a.rows() + n);
+  stacked << std::sqrt(big) * s.a, Matrix(s.count.cwiseSqrt().asDiagonal());
+  target << std::sqrt(big) * b, s.count.cwiseSqrt() * s.uniform;
+  const Vector guess = nnls(stacked, target);
+  std::vector<bool> zero(static_cast<std::size_t>(n));
+  for (Eigen::Index i = 0; i < n; ++i) {
+    zero[static_cast<std::size_t>(i)] = !(guess[i] > 0);
+  }
+  const Vector w = closest_to_uniform(s, zero);
+  GradientWeights out;
+  out.orbits = s.orbits;
+  out.uniform = s.uniform;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    out.orbits[static_cast<std::size_t>(i)].weight = w[i];
+  }
+  out.residual = (s.a * w - b).lpNorm<Eigen::Infinity>();
+  return out;
+}
+
+double GradientWeights::weight(const Vec3& xi, double spacing) const {
+  const std::array<long long, 3> o =
+      orbit_representative({std::llround(xi[0] / spacing), std::llround(xi[1] / spacing),
+                            std::llround(xi[2] / spacing)});
+  for (const Orbit& orbit : orbits) {
+    if (orbit.offset == o) {
+      return orbit.weight;
+    }
+  }
+  // Outside the table: the shell of orbits whose length is nearest to |ξ|/λ.
+  const double r = norm(xi) / spacing;
+  double best = -1, sum = 0, total = 0;
+  for (const Orbit& orbit : orbits) {
+    const auto& p = orbit.offset;
+    const double d =
+        std::abs(std::sqrt(static_cast<double>(p[0] * p[0] + p[1] * p[1] + p[2] * p[2])) - r);
+    if (best < 0 || d < best - 1e-12) {
+      best = d;
+      sum = total = 0;
+    }
+    if (d <= best + 1e-12) {
+      sum += static_cast<double>(orbit.count) * orbit.weight;
+      total += static_cast<double>(orbit.count);
+    }
+  }
+  return total > 0 ? sum / total : 0.0;
+}
+
+double fracture_energy_weight_ratio(const CorrectionSpec& spec) {
+  const double lambda = spec.lattice.spacing;
+  const double delta = spec.lattice.horizon();
+  const int dim = spec.dimension.dim;
+  const auto normal = static_cast<std::size_t>(dim - 1);
+  MomentWeights moment;
+  GradientWeights gradient;
+  if (spec.volume_correction == VolumeCorrection::moment) {
+    moment = moment_matched_weights(spec);
+  } else if (spec.volume_correction == VolumeCorrection::gradient) {
+    gradient = gradient_matched_weights(spec);
+  }
+  double weighted = 0, plain = 0;
+  for_each_offset_within(spec.lattice.horizon_factor, dim, spec.horizon_rule,
+                         [&](const std::array<long long, 3>& o) {
+                           if (o[normal] <= 0) {
+                             return;
+                           }
+                           const Vec3 xi = offset_vector(o, lambda);
+                           double w = 1;
+                           switch (spec.volume_correction) {
+                           case VolumeCorrection::none:
+                             break;
+                           case VolumeCorrection::linear:
+                             w = volume_fraction(spec.volume_correction, norm(xi), delta, lambda);
+                             break;
+                           case VolumeCorrection::exact:
+                             w = exact_volume_fraction(dim, xi, delta, lambda);
+                             break;
+                           case VolumeCorrection::moment:
+                             w = moment.weight(xi);
+                             break;
+                           case VolumeCorrection::gradient:
+                             w = gradient.weight(xi, lambda);
+                             break;
+                           }
+                           const double term = xi[normal] * norm(xi);
+                           weighted += w * term;
+                           plain += term;
+                         });
+  return weighted / plain;
+}
+
+} // namespace pd
