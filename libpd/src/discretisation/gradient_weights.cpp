@@ -28,10 +28,15 @@ namespace pd {
 //    the equation reads Σ w V |ξ|³ P(n)² = (λ²U/9)((tr G)² + 2 G:G), free of c and E.
 //    Fields, only G_d non-zero for the depth axis d = dim − 1 (so P(n) = n_d (n·G_d·n)):
 //      3D (ν = 1/4): beam bending diag(1, −ν, −ν), plate bending diag(1, 0, −ν/(1−ν)), twist
-//                    xy = yx = 1;
+//                    xy = yx = 1 (the three independent sixth moments of a cubic lattice);
 //      2D: bending diag(1, −1/3) (the in-plane Poisson ratio of the model, plane stress and
-//          plane strain alike: C_xxyy/C_yyyy = 1/3), shear xy = yx = 1;
-//      1D: ∂_x ε_xx = 1.
+//          plane strain alike: C_xxyy/C_yyyy = 1/3). The shear gradient xy = yx = 1 cannot be
+//          matched as well: it needs Σ w|ξ|³n_x²n_y² = (2/3)λ² Σ w|ξ|n_x²n_y², but every bond
+//          with n_x n_y ≠ 0 has |ξ|² ≥ 2λ²;
+//      1D: none. Any non-negative weights give Σ w|ξ|³ ≥ λ² Σ w|ξ| where the cell needs a third
+//          of that: a bar cannot be made exact for a varying strain, so `gradient` is the
+//          4th-moment fit closest to uniform there.
+//    A field left out keeps the lattice's own response to its gradient (stiffer than the cell).
 // Plane stress and plane strain thus get the same weights (their C differ by a factor only).
 // Among the non-negative solutions we take the one closest to uniform weights in the sense of
 // min Σ_o N_o (w_o − w̄)²: a Lawson–Hanson NNLS first proves that one exists (least residual of
@@ -119,15 +124,15 @@ using Tensor2 = std::array<std::array<double, 3>, 3>;
 /// The strain-gradient fields G_d (d = dim − 1 the depth axis) of the `gradient` equations.
 std::vector<Tensor2> gradient_fields(int dim) {
   if (dim == 1) {
-    return {Tensor2{{{1, 0, 0}, {0, 0, 0}, {0, 0, 0}}}};
+    return {}; // no non-negative weights can: the 4th moment alone (see above)
   }
-  const Tensor2 shear{{{0, 1, 0}, {1, 0, 0}, {0, 0, 0}}};
   if (dim == 2) {
-    return {Tensor2{{{1, 0, 0}, {0, -1.0 / 3.0, 0}, {0, 0, 0}}}, shear};
+    return {Tensor2{{{1, 0, 0}, {0, -1.0 / 3.0, 0}, {0, 0, 0}}}};
   }
   const double nu = 0.25;
+  const Tensor2 twist{{{0, 1, 0}, {1, 0, 0}, {0, 0, 0}}};
   return {Tensor2{{{1, 0, 0}, {0, -nu, 0}, {0, 0, -nu}}},
-          Tensor2{{{1, 0, 0}, {0, 0, 0}, {0, 0, -nu / (1 - nu)}}}, shear};
+          Tensor2{{{1, 0, 0}, {0, 0, 0}, {0, 0, -nu / (1 - nu)}}}, twist};
 }
 
 /// The equations A w = b of the `gradient` weights, one column per orbit, rows scaled to b = 1.
