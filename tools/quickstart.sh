@@ -20,7 +20,7 @@ packages=(
   build-essential cmake ninja-build pkg-config git
   libeigen3-dev libyaml-cpp-dev libcli11-dev libfmt-dev
   libgtest-dev libgmock-dev libbenchmark-dev libhwy-dev
-  libsundials-dev libdeal.ii-dev
+  libsundials-dev libdeal.ii-dev libsuitesparse-dev
   python3 python3-matplotlib python3-yaml chromium
 )
 if [[ $mode == report ]]; then

@@ -36,6 +36,9 @@ void print_report(const RunArgs& a, const RunOutcome& out) {
   fmt::print("wall {:.3f} s, {:.3g} bond updates/s, {} threads\n", out.result.wall_seconds,
              bond_updates_per_second(out.bonds, out.evaluations_this_run, out.result.wall_seconds),
              thread_count());
+  if (out.summary.find("integrator_details") != nullptr) {
+    fmt::print("{}\n", out.result.message); // static: solver, factor size, phase times
+  }
   for (const auto& [name, value] : out.probes) {
     fmt::print("  probe {:<20} {:.9g}\n", printable(name), value);
   }

@@ -1,6 +1,8 @@
 // summary.json of a run.
 #include "libpd/app/run_summary.hpp"
 
+#include <utility>
+
 namespace pd {
 
 Json run_summary(const Scene& scene, const Simulation& sim, const RunOutcome& out,
@@ -39,6 +41,9 @@ Json run_summary(const Scene& scene, const Simulation& sim, const RunOutcome& ou
   j["strain_energy"] = out.result.strain_energy;
   j["residual"] = out.result.residual;
   j["memory_bytes"] = model.memory_bytes();
+  if (Json details = sim.integrator().summary(); details.is_object()) {
+    j["integrator_details"] = std::move(details);
+  }
   Json& pj = j["probes"];
   pj = Json::object();
   for (const auto& [name, value] : out.probes) {

@@ -9,19 +9,19 @@
 //   mirror dependant          u_d = σ u_m: its column folds onto the master's (copy coupling:
 //                             K_ff + K_fd R), and under consistent coupling its row folds too,
 //                             weighted σ V_d / V_m, as fold_mirror_forces does (Rᵀ K R).
-// K is assembled once and factored (Eigen: SimplicialLDLT when it is symmetric, SparseLU
-// otherwise). Then modified Newton on the real force kernel: u ← u + K⁻¹ r(u), r = b(y) + b_ext
-// on the free dofs, until ‖r‖ ≤ tolerance ‖b_ext‖: for finite stretch this converges to the
-// nonlinear equilibrium that dynamic relaxation finds, and a wrong assembly cannot pass (its
-// iteration would not converge). The solve is at the full load: a ramp has no meaning here.
+// K is assembled once and factored (time/sparse_factorisation.hpp: CHOLMOD's supernodal
+// Cholesky when it is symmetric, an LU factorisation otherwise). Then modified Newton on the
+// real force kernel: u ← u + K⁻¹ r(u), r = b(y) + b_ext on the free dofs, until
+// ‖r‖ ≤ tolerance ‖b_ext‖: for finite stretch this converges to the nonlinear equilibrium that
+// dynamic relaxation finds, and a wrong assembly cannot pass (its iteration would not converge).
+// The solve is at the full load: a ramp has no meaning here.
 #include "libpd/core/binary_state.hpp"
 #include "libpd/kernel/force_kernel.hpp"
 #include "libpd/kernel/linear_operator.hpp"
 #include "libpd/time/integrator.hpp"
+#include "sparse_factorisation.hpp"
 
-#include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
-#include <Eigen/SparseLU>
 #include <chrono>
 #include <cmath>
 #include <fmt/format.h>
@@ -122,6 +122,7 @@ public:
     return "a static solve is one step: there is nothing to continue (rerun it instead)";
   }
   std::string report() const override { return report_; }
+  Json summary() const override { return details_; }
 
 private:
   /// K (free × free, per unit volume) and the right-hand side. With u = A u_f + u_p (A maps the
@@ -213,26 +214,9 @@ private:
     const double asym = (K - Kt).norm() / std::max(K.norm(), 1e-300);
     const bool symmetric = asym <= 1e-12;
 
-    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt;
-    Eigen::SparseLU<Eigen::SparseMatrix<double>> lu;
-    if (symmetric) {
-      ldlt.compute(K);
-      if (ldlt.info() != Eigen::Success) {
-        throw std::runtime_error("static solve: the stiffness matrix is singular (is the body "
-                                 "held against rigid motion by its supports?)");
-      }
-    } else {
-      lu.analyzePattern(K);
-      lu.factorize(K);
-      if (lu.info() != Eigen::Success) {
-        throw std::runtime_error("static solve: the stiffness matrix is singular (is the body "
-                                 "held against rigid motion by its supports?)");
-      }
-    }
+    const std::unique_ptr<SparseFactorisation> factor = factorise(K, symmetric);
     const auto t2 = clock::now();
-    auto solve_with = [&](const Eigen::VectorXd& b) -> Eigen::VectorXd {
-      return symmetric ? Eigen::VectorXd(ldlt.solve(b)) : Eigen::VectorXd(lu.solve(b));
-    };
+    auto solve_with = [&](const Eigen::VectorXd& b) { return factor->solve(b); };
 
     // Linear solution, then modified Newton on the force kernel's residual.
     const LoadRamp full;
@@ -270,16 +254,28 @@ private:
     std::fill(st.velocity.begin(), st.velocity.end(), 0.0);
     const auto t3 = clock::now();
     const auto s = [](auto a, auto b) { return std::chrono::duration<double>(b - a).count(); };
-    const double factor_bytes =
-        symmetric ? static_cast<double>(ldlt.matrixL().nestedExpression().nonZeros()) * 12.0
-                  : static_cast<double>(lu.nnzL() + lu.nnzU()) * 12.0;
+    Json& j = details_;
+    j = Json::object();
+    j["solver"] = factor->name();
+    j["symmetric"] = symmetric;
+    j["asymmetry"] = asym;
+    j["unknowns"] = static_cast<std::size_t>(n);
+    j["nonzeros"] = static_cast<std::size_t>(K.nonZeros());
+    j["factor_nonzeros"] = factor->factor_nonzeros();
+    j["factor_bytes"] = factor->factor_bytes();
+    j["assembly_seconds"] = s(t0, t1);
+    j["factorisation_seconds"] = s(t1, t2);
+    j["newton_seconds"] = s(t2, t3);
+    j["newton_iterations"] = iterations;
+    j["residual"] = residual;
     report_ = fmt::format(
         "static solve: {} unknowns, {} nonzeros, {} ({} operator, ‖K−Kᵀ‖/‖K‖ = {:.1e}); "
-        "assembly {:.3f} s, factorisation {:.3f} s (factor ~{:.1f} MiB), {} Newton iterations "
-        "{:.3f} s, residual {:.2e} of the load",
-        n, K.nonZeros(), symmetric ? "Eigen SimplicialLDLT" : "Eigen SparseLU",
-        symmetric ? "symmetric" : "nonsymmetric", asym, s(t0, t1), s(t1, t2),
-        factor_bytes / (1024.0 * 1024.0), iterations, s(t2, t3), residual);
+        "assembly {:.3f} s, factorisation {:.3f} s (factor {} nonzeros, {:.1f} MiB), {} Newton "
+        "iterations {:.3f} s, residual {:.2e} of the load",
+        n, K.nonZeros(), factor->name(), symmetric ? "symmetric" : "nonsymmetric", asym, s(t0, t1),
+        s(t1, t2), factor->factor_nonzeros(),
+        static_cast<double>(factor->factor_bytes()) / (1024.0 * 1024.0), iterations, s(t2, t3),
+        residual);
     if (residual > acceptable_residual) {
       throw std::runtime_error(fmt::format("static solve did not converge: {}", report_));
     }
@@ -294,6 +290,7 @@ private:
   ForceEvaluator& forces_;
   bool solved_ = false;
   std::string report_;
+  Json details_;
 };
 
 } // namespace

@@ -17,6 +17,7 @@
 //                damping as a term of the right-hand side. Needs LIBPD_WITH_SUNDIALS.
 #pragma once
 
+#include "libpd/core/json.hpp"
 #include "libpd/core/names.hpp"
 #include "libpd/discretisation/model.hpp"
 #include "libpd/kernel/force_kernel.hpp"
@@ -164,6 +165,8 @@ public:
   virtual bool finished() const { return false; }
   /// What the method did, for the run's summary (empty: nothing to say).
   virtual std::string report() const { return {}; }
+  /// The same as numbers, for summary.json's `integrator_details` (null: nothing to say).
+  virtual Json summary() const { return {}; }
 
 protected:
   virtual void save_state(CheckpointWriter&) const {}
