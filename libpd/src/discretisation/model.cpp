@@ -243,7 +243,8 @@ ModelStorage model_storage(const ModelSpec& spec, const EffectSet& effects) {
 std::size_t Model::memory_bytes() const {
   return model_storage(spec, effects)
              .bytes(size(), family.directed_bond_count(), constraints.size()) +
-         ModelStorage::fixed;
+         extrapolated.size() * ModelStorage::per_dependant +
+         extrapolated.source.size() * ModelStorage::per_extrapolation_term + ModelStorage::fixed;
 }
 
 namespace {

@@ -200,7 +200,21 @@ ResourceEstimate estimate_resources(const ModelSpec& spec, const SolverSpec& sol
   for (const BodySpec& b : spec.bodies) {
     all.boxes.insert(all.boxes.end(), b.region.boxes.begin(), b.region.boxes.end());
   }
-  const double n = lattice_points_in_union(d, spec.lattice, all);
+  const double bodies = lattice_points_in_union(d, spec.lattice, all);
+  // Ghost sites (surface_correction ghost) lie within δ of the bodies: at most the points of the
+  // boxes grown by the horizon, less the bodies' own. Each has at most a family of sources.
+  double ghosts = 0;
+  if (spec.surface_correction == SurfaceCorrection::ghost) {
+    Region grown = all;
+    for (Box& b : grown.boxes) {
+      for (int a = 0; a < d.dim; ++a) {
+        b.lo[a] -= spec.lattice.horizon();
+        b.hi[a] += spec.lattice.horizon();
+      }
+    }
+    ghosts = std::max(0.0, lattice_points_in_union(d, spec.lattice, grown) - bodies);
+  }
+  const double n = bodies + ghosts;
   e.particles = n;
   e.bonds_per_particle =
       std::min(bulk_family_size(d, spec.lattice, spec.horizon_rule), std::max(n - 1, 0.0));
@@ -232,7 +246,14 @@ ResourceEstimate estimate_resources(const ModelSpec& spec, const SolverSpec& sol
     }
     constrained += std::min(members, n) * components;
   }
-  e.model_bytes = storage.bytes(n, directed, constrained) + ModelStorage::fixed;
+  // Extrapolated particles: the ghosts and, under `quadratic` coupling, the mirror supports'
+  // particles (counted with the constraints above), each with at most a family of terms.
+  const double dependants =
+      ghosts + (spec.mirror_coupling == MirrorCoupling::quadratic ? constrained / 3.0 : 0.0);
+  e.model_bytes = storage.bytes(n, directed, constrained) +
+                  dependants * (ModelStorage::per_dependant +
+                                (e.bonds_per_particle + 1) * ModelStorage::per_extrapolation_term) +
+                  ModelStorage::fixed;
 
   // Integrator vectors beyond the run state (3N doubles each, per-dof flags of one byte).
   const double dof = 3 * n;

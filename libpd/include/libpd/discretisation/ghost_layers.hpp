@@ -65,11 +65,11 @@ std::vector<Vec3> ghost_sites(int dim, const LatticeSpec& lattice, HorizonRule r
 /// Extrapolation coefficients for every particle listed in `fitted` (ascending), from the
 /// particles with dependent[i] = 0 (the sources; every fitted particle is dependent too): each
 /// dependant is fitted around the nearest source among its bond family, from that source and its
-/// own free neighbours, with the quadratic basis restricted by the clamp planes the dependant lies
-/// behind (see above). A dependant with no source within the horizon, or behind three planes, gets
-/// no term (its displacement stays zero). Axes along which the sources do not vary enough for a
-/// linear (two positions) or quadratic (three) term drop those terms, so thin bodies extrapolate
-/// with what they can resolve.
+/// own free neighbours within √6 λ, with the quadratic basis restricted by the clamp planes the
+/// dependant lies behind (see above). A dependant with no source within the horizon, or behind
+/// three planes, gets no term (its displacement stays zero). Axes along which the sources do not
+/// vary enough for a linear (two positions) or quadratic (three) term drop those terms, so thin
+/// bodies extrapolate with what they can resolve.
 ExtrapolatedParticles extrapolation_ties(int dim, double spacing, const std::vector<Vec3>& position,
                                          const BondFamily& family,
                                          const std::vector<std::uint8_t>& dependent,

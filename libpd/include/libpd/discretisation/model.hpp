@@ -141,6 +141,9 @@ struct ModelStorage {
   std::size_t per_particle = 0; ///< particle set, CSR offset, density, loads, damage, run state
   std::size_t per_directed_bond = 0; ///< CSR neighbour and 1/|ξ|, per-bond field, bond history
   static constexpr std::size_t per_constraint = sizeof(Constraint);
+  /// An extrapolated particle (index and CSR offset) and each of its terms (source, coefficient).
+  static constexpr std::size_t per_dependant = sizeof(std::uint32_t) + sizeof(std::size_t);
+  static constexpr std::size_t per_extrapolation_term = sizeof(std::uint32_t) + sizeof(double);
   /// Bytes that do not grow with the model: the closing entry of the CSR offsets. The resource
   /// estimate leaves them out.
   static constexpr std::size_t fixed = sizeof(std::size_t);

@@ -7,17 +7,18 @@ namespace pd::scene {
 
 namespace {
 
-/// The model options as scene files default them. The corrections default to the pair picked from
-/// the block-tension measurements (tensor + moment: +0.35 % elongation, +0.59 % lateral
-/// contraction); ModelSpec's own default stays the bare model (none + none) for code that
-/// assembles models directly.
+/// The model options as scene files default them: the treatment that is right in tension and in
+/// bending for any box or union of boxes (issue 14). Ghost layers outside free surfaces and
+/// clamps extrapolated by the quadratics that vanish on their faces give every body particle the
+/// bulk energy of any quadratic field (ghost_layers.hpp); the `gradient` bond weights make that
+/// bulk energy the continuum's, cell by cell, for uniform strain and for bending
+/// (corrections.hpp). ModelSpec's own default stays the bare model (none + none, copy) for code
+/// that assembles models directly.
 struct SceneModelOptions {
   StretchKind stretch = EffectSet{}.stretch;
-  SurfaceCorrection surface_correction = SurfaceCorrection::tensor;
-  VolumeCorrection volume_correction = VolumeCorrection::moment;
-  /// `copy` stays the default only until issue 14's default surface treatment lands: the shipped
-  /// structural scenes' correction pairs were calibrated against it (mirror_constraints.hpp).
-  MirrorCoupling mirror_coupling = MirrorCoupling::copy;
+  SurfaceCorrection surface_correction = SurfaceCorrection::ghost;
+  VolumeCorrection volume_correction = VolumeCorrection::gradient;
+  MirrorCoupling mirror_coupling = MirrorCoupling::quadratic;
 };
 
 constexpr Key model_keys[] = {
@@ -33,16 +34,17 @@ constexpr Key model_keys[] = {
      .bind = field_with_default<&SceneModelOptions::surface_correction>()},
     {.name = "volume_correction",
      .type = Type::choice,
-     .doc = "bond quadrature weights: partial volume of cut cells (linear, exact) or "
-            "moment-matched lattice weights (moment)",
+     .doc = "bond quadrature weights: partial volume of cut cells (linear, exact), "
+            "moment-matched lattice weights (moment), or weights that also match a cell's "
+            "bending energy (gradient: stiffness on the bonds up to 2 spacings)",
      .choices = enum_words<VolumeCorrection>,
      .bind = field_with_default<&SceneModelOptions::volume_correction>()},
     {.name = "mirror_coupling",
      .type = Type::choice,
-     .doc = "mirror supports: copy (support particles copy their images' displacements, one-sided, "
-            "not energy-conserving; the default while the structural scenes' correction pairs are "
-            "calibrated on it) or consistent (forces sent back to the images: symmetric, "
-            "energy-conserving)",
+     .doc = "mirror supports: quadratic (support particles extrapolated from the body by the "
+            "quadratics that vanish on the face: symmetric, exact for every quadratic field the "
+            "clamp allows), consistent (odd images, forces sent back: symmetric) or copy (odd "
+            "images, one-sided, not energy-conserving)",
      .choices = enum_words<MirrorCoupling>,
      .bind = field_with_default<&SceneModelOptions::mirror_coupling>()},
 };
