@@ -364,6 +364,32 @@ std::vector<double> load_force_densities(const ModelSpec& spec, const ParticleSe
   return force_density;
 }
 
+/// Bonds whose factor is zero (the `gradient` weights beyond two spacings, bonds between two
+/// dependants) store no energy and carry no force: they leave the family, so the kernel, the
+/// time-step bounds and the damage index never see them. Factors are symmetric in i and j, so
+/// every bond keeps its partner.
+void drop_bonds_without_stiffness(BondFamily& family, std::vector<double>& factor) {
+  if (std::none_of(factor.begin(), factor.end(), [](double f) { return f == 0.0; })) {
+    return;
+  }
+  BondFamily kept;
+  kept.offsets.reserve(family.offsets.size());
+  kept.offsets.push_back(0);
+  std::vector<double> kept_factor;
+  for (std::size_t i = 0; i + 1 < family.offsets.size(); ++i) {
+    for (std::size_t k = family.offsets[i]; k < family.offsets[i + 1]; ++k) {
+      if (factor[k] != 0.0) {
+        kept.neighbour.push_back(family.neighbour[k]);
+        kept.inverse_length.push_back(family.inverse_length[k]);
+        kept_factor.push_back(factor[k]);
+      }
+    }
+    kept.offsets.push_back(kept.neighbour.size());
+  }
+  family = std::move(kept);
+  factor = std::move(kept_factor);
+}
+
 void require_material_and_body(const ModelSpec& spec) {
   if (spec.materials.empty() || spec.bodies.empty()) {
     throw std::runtime_error("a model needs at least one material and one body");
@@ -413,14 +439,6 @@ Model build_model(const ModelSpec& spec, ParticleSet particles) {
     m.field.critical_stretch = k.critical_stretch;
     m.field.yield_stretch = k.yield_stretch;
   } else {
-    const std::size_t nb = m.family.directed_bond_count();
-    m.field.bond_stiffness.resize(nb);
-    if (m.effects.damage) {
-      m.field.bond_critical_stretch.resize(nb);
-    }
-    if (m.effects.plasticity) {
-      m.field.bond_yield_stretch.resize(nb);
-    }
     std::vector<double> correction =
         bond_correction_factors(spec.corrections(), m.particles, m.family);
     if (consistent_mirror_coupling(spec.mirror_coupling, m.constraints) ||
@@ -436,6 +454,15 @@ Model build_model(const ModelSpec& spec, ParticleSet particles) {
       for (std::size_t k = 0; k < correction.size(); ++k) {
         correction[k] *= weight[k];
       }
+    }
+    drop_bonds_without_stiffness(m.family, correction);
+    const std::size_t nb = m.family.directed_bond_count();
+    m.field.bond_stiffness.resize(nb);
+    if (m.effects.damage) {
+      m.field.bond_critical_stretch.resize(nb);
+    }
+    if (m.effects.plasticity) {
+      m.field.bond_yield_stretch.resize(nb);
     }
     for (std::size_t i = 0; i < n; ++i) {
       for (std::size_t k = m.family.offsets[i]; k < m.family.offsets[i + 1]; ++k) {

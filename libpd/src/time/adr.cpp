@@ -83,10 +83,7 @@ public:
     lambda_ = adr_fictitious_density(m);
     velocity_.assign(3 * n, 0.0);
     previous_.assign(3 * n, 0.0);
-    constrained_.assign(3 * n, 0);
-    for (const Constraint& c : m.constraints) {
-      constrained_[3 * c.particle + c.component] = 1;
-    }
+    constrained_ = held_dofs(m);
   }
 
   StepReport step(State& st, double dt) override {

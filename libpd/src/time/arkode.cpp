@@ -183,10 +183,7 @@ public:
     scratch_force_.assign(ndof_, 0.0);
     y_ = N_VMake_Serial(static_cast<sunindextype>(2 * ndof_), buffer_.data(), context_);
     constraint_rate_.assign(ndof_, 0.0);
-    constrained_.assign(ndof_, 0);
-    for (const Constraint& c : m.constraints) {
-      constrained_[3 * c.particle + c.component] = 1;
-    }
+    constrained_ = held_dofs(m);
   }
 
   ~ArkodeIntegrator() override {

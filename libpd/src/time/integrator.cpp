@@ -39,6 +39,17 @@ void Integrator::restore(CheckpointReader& r) {
   restore_state(r);
 }
 
+std::vector<std::uint8_t> held_dofs(const Model& model) {
+  std::vector<std::uint8_t> held(3 * model.size(), 0);
+  for (const Constraint& c : model.constraints) {
+    held[3 * c.particle + c.component] = 1;
+  }
+  for (const std::uint32_t d : model.extrapolated.particle) {
+    held[3 * d] = held[3 * d + 1] = held[3 * d + 2] = 1;
+  }
+  return held;
+}
+
 void apply_constraints(const Model& model, const LoadRamp& ramp, double t, double* position,
                        double* velocity) {
   const double factor = ramp.factor(t);

@@ -40,10 +40,7 @@ Simulation::Simulation(Model& model, const SolverSpec& solver, const InitialSpec
   }
   ramp_.ramp_time = solver.ramp_time;
   apply_constraints(model, ramp_, 0.0, state_.position.data(), state_.velocity.data());
-  constrained_.assign(3 * n, 0);
-  for (const Constraint& c : model.constraints) {
-    constrained_[3 * c.particle + c.component] = 1;
-  }
+  constrained_ = held_dofs(model);
 
   // Mirror dependants' forces go back to their images (Rᵀ) under consistent coupling, so every
   // integrator sees the symmetric constrained operator (discretisation/mirror_constraints.hpp).

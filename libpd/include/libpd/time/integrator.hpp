@@ -209,6 +209,12 @@ std::vector<double> adr_fictitious_density(const Model& model);
 /// Largest |u|² over particles (may be +inf), NaN as soon as any coordinate is not finite.
 StepReport displacement_report(const Model& model, const double* y);
 
+/// Per dof: 1 where the dof is not an unknown of the equations of motion: held by a support
+/// (fixed, prescribed or a mirror image) or belonging to an extrapolated particle (ghosts,
+/// quadratic clamps), which apply_constraints sets from its sources. Their force entries are
+/// reactions, never residuals.
+std::vector<std::uint8_t> held_dofs(const Model& model);
+
 /// Apply prescribed displacements at time t to positions (and velocities if given).
 void apply_constraints(const Model& model, const LoadRamp& ramp, double t, double* position,
                        double* velocity);
