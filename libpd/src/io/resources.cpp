@@ -50,6 +50,63 @@ double sum_over_boxes(const ModelDimension& d, const LatticeSpec& lattice, const
   return sum;
 }
 
+/// Lattice sites outside a box within the horizon of its points (ghost_layers.hpp): a site whose
+/// distances beyond the box's faces are (a_x, a_y, a_z) layers (0 where it lies within the box's
+/// range) is within the horizon of the box's nearest point iff Σ a² is, and there are
+/// Π (a_i = 0 ? n_i : 2) such sites. Exact for one box.
+double ghost_sites_around_box(const ModelDimension& d, const LatticeSpec& lattice, HorizonRule rule,
+                              const Box& box) {
+  std::array<double, 3> n{1, 1, 1};
+  for (int a = 0; a < d.dim; ++a) {
+    n[static_cast<std::size_t>(a)] = axis_interval(lattice, a, box.lo[a], box.hi[a]).count();
+    if (n[static_cast<std::size_t>(a)] == 0 || !std::isfinite(n[static_cast<std::size_t>(a)])) {
+      return n[static_cast<std::size_t>(a)];
+    }
+  }
+  const InHorizon inside(lattice.horizon_factor, rule);
+  const auto reach = static_cast<long long>(std::ceil(lattice.horizon_factor));
+  double count = 0;
+  const long long ry = d.dim > 1 ? reach : 0;
+  const long long rz = d.dim > 2 ? reach : 0;
+  for (long long az = 0; az <= rz; ++az) {
+    for (long long ay = 0; ay <= ry; ++ay) {
+      for (long long ax = 0; ax <= reach; ++ax) {
+        const auto s2 = static_cast<double>(ax * ax + ay * ay + az * az);
+        if (s2 > 0 && inside(s2)) {
+          count += (ax == 0 ? n[0] : 2.0) * (ay == 0 ? n[1] : 2.0) * (az == 0 ? n[2] : 2.0);
+        }
+      }
+    }
+  }
+  return count;
+}
+
+/// Ghost sites around a union of boxes, never fewer than there are: a ghost near a box nested in
+/// another is near the outer one too, so nested and repeated boxes are left out, and the sum over
+/// the others can only count too many (where boxes touch, their faces' ghosts are body sites).
+/// Work (m + 1)^dim per box, m capped by the scene checks.
+double ghost_sites_around_union(const ModelDimension& d, const LatticeSpec& lattice,
+                                HorizonRule rule, const Region& all) {
+  const auto& boxes = all.boxes;
+  double ghosts = 0;
+  for (std::size_t i = 0; i < boxes.size(); ++i) {
+    bool nested = false;
+    for (std::size_t j = 0; j < boxes.size() && !nested; ++j) {
+      bool inside = j != i;
+      bool same = true;
+      for (int a = 0; a < d.dim && inside; ++a) {
+        inside = boxes[i].lo[a] >= boxes[j].lo[a] && boxes[i].hi[a] <= boxes[j].hi[a];
+        same = same && boxes[i].lo[a] == boxes[j].lo[a] && boxes[i].hi[a] == boxes[j].hi[a];
+      }
+      nested = inside && (!same || j < i);
+    }
+    if (!nested) {
+      ghosts += ghost_sites_around_box(d, lattice, rule, boxes[i]);
+    }
+  }
+  return ghosts;
+}
+
 std::size_t distinct_materials(const ModelSpec& spec) {
   std::vector<int> used;
   for (const BodySpec& b : spec.bodies) {
@@ -201,24 +258,25 @@ ResourceEstimate estimate_resources(const ModelSpec& spec, const SolverSpec& sol
     all.boxes.insert(all.boxes.end(), b.region.boxes.begin(), b.region.boxes.end());
   }
   const double bodies = lattice_points_in_union(d, spec.lattice, all);
-  // Ghost sites (surface_correction ghost) lie within δ of the bodies: at most the points of the
-  // boxes grown by the horizon, less the bodies' own. Each has at most a family of sources.
-  double ghosts = 0;
-  if (spec.surface_correction == SurfaceCorrection::ghost) {
-    Region grown = all;
-    for (Box& b : grown.boxes) {
-      for (int a = 0; a < d.dim; ++a) {
-        b.lo[a] -= spec.lattice.horizon();
-        b.hi[a] += spec.lattice.horizon();
-      }
-    }
-    ghosts = std::max(0.0, lattice_points_in_union(d, spec.lattice, grown) - bodies);
-  }
+  // Ghost sites (surface_correction ghost): the lattice sites within δ of the bodies.
+  const double ghosts = spec.surface_correction == SurfaceCorrection::ghost
+                            ? ghost_sites_around_union(d, spec.lattice, spec.horizon_rule, all)
+                            : 0.0;
   const double n = bodies + ghosts;
   e.particles = n;
-  e.bonds_per_particle =
-      std::min(bulk_family_size(d, spec.lattice, spec.horizon_rule), std::max(n - 1, 0.0));
-  e.bonds = 0.5 * n * e.bonds_per_particle;
+  // `gradient` weights leave only the offsets they weight in the family (model.cpp drops bonds
+  // without stiffness); a ghost bonds only towards the body, about half a family.
+  double family = bulk_family_size(d, spec.lattice, spec.horizon_rule);
+  if (spec.volume_correction == VolumeCorrection::gradient && spec.lattice.horizon_factor <= 40 &&
+      spec.lattice.position_jitter == 0) {
+    double weighted = 0;
+    for (const auto& o : gradient_matched_weights(spec.corrections()).orbits) {
+      weighted += o.weight > 0 ? static_cast<double>(o.count) : 0.0;
+    }
+    family = std::min(family, weighted);
+  }
+  e.bonds_per_particle = std::min(family, std::max(n - 1, 0.0));
+  e.bonds = 0.5 * (bodies + 0.5 * ghosts) * e.bonds_per_particle;
   const double directed = 2.0 * e.bonds;
 
   constexpr double dbl = sizeof(double);

@@ -666,8 +666,8 @@ TEST(GradientWeights, BarsAndShearGradientsStayStifferThanTheCell) {
   // 2D weights exist all the same (1D: the 4th moment alone; 2D: moments and bending).
   for (double m : {3.015, 2.0 * std::sqrt(3.0), 4.0}) {
     const double lambda = 0.1;
-    const auto w = pd::gradient_matched_weights(
-        gradient_spec(1, pd::PlaneMode::plane_stress, m, lambda));
+    const auto w =
+        pd::gradient_matched_weights(gradient_spec(1, pd::PlaneMode::plane_stress, m, lambda));
     EXPECT_LT(w.residual, 1e-10);
     double s1 = 0, s3 = 0;
     for (int i = -static_cast<int>(m) - 1; i <= static_cast<int>(m) + 1; ++i) {
@@ -913,6 +913,26 @@ TEST(VolumeCorrection, MomentWeightsReproduceContinuumMoments) {
       EXPECT_NEAR(s22 / c22, 1.0, 1e-12) << "dim " << dim << " m " << m;
       EXPECT_GT(wmin, 0.5) << "weights must stay positive and moderate";
       EXPECT_LT(wmax, 1.5);
+    }
+  }
+}
+
+TEST(GradientWeights, ShortHorizonsFallBackToWhatTheLatticeCanMatch) {
+  // Below m = 2 the gradient fields cannot be met; below √2 not even the 4th moments (no bond has
+  // n_x n_y ≠ 0). The weights stay non-negative and say what they match.
+  const auto at = [](double m) {
+    return pd::gradient_matched_weights(gradient_spec(3, pd::PlaneMode::plane_stress, m, 0.1));
+  };
+  EXPECT_EQ(at(2.0 * std::sqrt(3.0)).matched, pd::GradientWeights::Matched::moments_and_gradient);
+  const auto m15 = at(1.5);
+  EXPECT_EQ(m15.matched, pd::GradientWeights::Matched::moments);
+  EXPECT_LT(m15.residual, 1e-10);
+  const auto m1 = at(1.0);
+  EXPECT_EQ(m1.matched, pd::GradientWeights::Matched::closest);
+  EXPECT_GT(m1.residual, 0.1);
+  for (const auto& w : {m15, m1}) {
+    for (const auto& o : w.orbits) {
+      EXPECT_GE(o.weight, 0.0);
     }
   }
 }

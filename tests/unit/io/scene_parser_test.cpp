@@ -268,8 +268,9 @@ TEST(SceneParser, UnknownMirrorCoupling) {
                        "mean 'consistent'?"));
 }
 
-TEST(SceneParser, MirrorCouplingDefaultsToCopy) {
-  EXPECT_EQ(pd::parse_scene(yaml(minimal), "t").model.mirror_coupling, pd::MirrorCoupling::copy);
+TEST(SceneParser, MirrorCouplingDefaultsToQuadratic) {
+  EXPECT_EQ(pd::parse_scene(yaml(minimal), "t").model.mirror_coupling,
+            pd::MirrorCoupling::quadratic);
   EXPECT_EQ(pd::parse_scene(yaml(minimal) + "model:\n  mirror_coupling: consistent\n", "t")
                 .model.mirror_coupling,
             pd::MirrorCoupling::consistent);
@@ -1172,13 +1173,15 @@ TEST(SceneParser, MirrorTogetherWithFixed) {
 
 TEST(SceneParser, MirrorImageOutsideTheBody) {
   EXPECT_TRUE(fails_at(yaml(minimal) + "supports:\n  - name: s\n    box: [[0], [0.3]]\n"
-                                       "    mirror: {x: 0.95}\n",
+                                       "    mirror: {x: 0.95}\n"
+                                       "model:\n  mirror_coupling: consistent\n", // odd images
                        17, 13, "support 's': no particle at the mirror image (1.85, 0, 0)"));
 }
 
 TEST(SceneParser, MirrorImageHeldByAnotherSupport) {
   EXPECT_TRUE(fails_at(yaml(minimal) + "supports:\n  - name: m\n    box: [[0], [0.3]]\n"
                                        "    mirror: {x: 0.3}\n"
-                                       "  - name: f\n    box: [[0.3], [0.5]]\n    fixed: [x]\n",
+                                       "  - name: f\n    box: [[0.3], [0.5]]\n    fixed: [x]\n"
+                                       "model:\n  mirror_coupling: consistent\n", // odd images
                        17, 13, "is itself supported"));
 }

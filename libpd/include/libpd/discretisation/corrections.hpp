@@ -183,7 +183,15 @@ struct GradientWeights {
   };
   std::vector<Orbit> orbits; ///< by |o|², then by representative
   double uniform = 1;        ///< w̄: the uniform weight that matches the uniaxial 4th moment
-  double residual = 0;       ///< largest relative residual of the equations
+  double residual = 0;       ///< largest relative residual of the equations that were solved
+  /// What the weights match: everything; the fourth moments only (horizons below about 2λ have
+  /// too few orbits for the gradient fields); or neither exactly (below √2 λ in 2D and 3D), the
+  /// least-residual non-negative weights of the fourth moments.
+  enum class Matched {
+    moments_and_gradient,
+    moments,
+    closest
+  } matched = Matched::moments_and_gradient;
   /// Weight of a bond ξ: that of the orbit of round(ξ/λ). A bond that rounds to an offset outside
   /// the table (jittered particles near the horizon) takes the count-weighted mean weight of the
   /// shell of orbits whose |o| is nearest to |ξ|/λ (the outermost shell: weight 0 in 3D so far).
