@@ -54,7 +54,8 @@ VARIANTS = {
 }
 
 # Fields of summary.json that legitimately differ between the two runs.
-VOLATILE = {"wall_seconds", "bond_updates_per_second", "setup_seconds", "checkpoint",
+VOLATILE = {"wall_seconds", "bond_updates_per_second", "setup_seconds", "setup", "solve_seconds",
+            "peak_memory_bytes", "checkpoint",
             "force_evaluations_this_run", "stop_signal",
             "restarted_from"}
 

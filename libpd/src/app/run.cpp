@@ -130,8 +130,13 @@ private:
   // Setup. The model, its simulation and the probes bound to its particles; the checkpoint
   // policy is checked here, so a run that could not be continued is refused before it starts.
   void setup() {
+    using clock = std::chrono::steady_clock;
+    const auto start = clock::now();
     model_ = build_model(scene_);
+    const auto built = clock::now();
     sim_ = std::make_unique<Simulation>(model_, scene_.solver, scene_.initial);
+    out_.model_seconds = std::chrono::duration<double>(built - start).count();
+    out_.simulation_seconds = std::chrono::duration<double>(clock::now() - built).count();
     probes_ = resolve_probes(scene_.probes, model_);
     out_.particles = model_.size();
     out_.bonds = model_.family.bond_count();

@@ -1,9 +1,22 @@
 // summary.json of a run.
 #include "libpd/app/run_summary.hpp"
 
+#include <fstream>
+#include <string>
 #include <utility>
 
 namespace pd {
+
+std::uint64_t peak_resident_bytes() {
+  std::ifstream status("/proc/self/status");
+  std::string line;
+  while (std::getline(status, line)) {
+    if (line.rfind("VmHWM:", 0) == 0) {
+      return std::stoull(line.substr(6)) * 1024; // "VmHWM:   123456 kB"
+    }
+  }
+  return 0;
+}
 
 Json run_summary(const Scene& scene, const Simulation& sim, const RunOutcome& out,
                  const RunOptions& options) {
@@ -31,6 +44,11 @@ Json run_summary(const Scene& scene, const Simulation& sim, const RunOutcome& ou
   j["dt_stable"] = out.result.dt_stable;
   j["force_evaluations"] = out.result.force_evaluations;
   j["setup_seconds"] = out.setup_seconds;
+  Json& setup = j["setup"];
+  setup["scene_seconds"] = options.scene_seconds;
+  setup["model_seconds"] = out.model_seconds;
+  setup["simulation_seconds"] = out.simulation_seconds;
+  j["solve_seconds"] = out.result.wall_seconds;
   j["wall_seconds"] = out.result.wall_seconds;
   j["bond_updates"] =
       static_cast<double>(out.bonds) * static_cast<double>(out.result.force_evaluations);
@@ -41,6 +59,7 @@ Json run_summary(const Scene& scene, const Simulation& sim, const RunOutcome& ou
   j["strain_energy"] = out.result.strain_energy;
   j["residual"] = out.result.residual;
   j["memory_bytes"] = model.memory_bytes();
+  j["peak_memory_bytes"] = peak_resident_bytes();
   if (Json details = sim.integrator().summary(); details.is_object()) {
     j["integrator_details"] = std::move(details);
   }

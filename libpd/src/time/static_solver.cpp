@@ -15,6 +15,8 @@
 // ‖r‖ ≤ tolerance ‖b_ext‖: for finite stretch this converges to the nonlinear equilibrium that
 // dynamic relaxation finds, and a wrong assembly cannot pass (its iteration would not converge).
 // The solve is at the full load: a ramp has no meaning here.
+#include "libpd/time/static_solver.hpp"
+
 #include "libpd/core/binary_state.hpp"
 #include "libpd/kernel/force_kernel.hpp"
 #include "libpd/kernel/linear_operator.hpp"
@@ -22,6 +24,7 @@
 #include "sparse_factorisation.hpp"
 
 #include <Eigen/SparseCore>
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <fmt/format.h>
@@ -95,6 +98,113 @@ DofMap map_dofs(const Model& m) {
   return d;
 }
 
+/// The system in force units (each equation of particle i times V_i). With u = A u_f + u_p (A maps
+/// the unknowns to every dof: free dofs themselves, dependants through their terms; u_p holds the
+/// prescribed values and what dependants take from prescribed sources) and B the map of equations
+/// (free rows themselves; a dependant whose forces fold sends its row to its sources with
+/// a V_d / V_s, as fold_mirror_forces does), it is Bᵀ K A u_f = Bᵀ (b_ext − K u_p), each row
+/// then times its particle's volume: Aᵀ (V K) A, symmetric, when every dependant folds; K_ff +
+/// K_fd A under `copy` mirrors. Sparse products, not per-bond folding: an extrapolated particle
+/// has ~20 sources, and a bond between two of them would otherwise add 20² entries.
+StaticSystem assemble(const Model& m, const DofMap& d) {
+  const auto& free_dofs = d.free_dofs;
+  Eigen::VectorXd rhs;
+
+  using Sparse = Eigen::SparseMatrix<double>;
+  const auto ndof = static_cast<Eigen::Index>(3 * m.size());
+  const auto n = static_cast<Eigen::Index>(d.free_dofs.size());
+  const auto& volume = m.particles.volume;
+
+  std::vector<Eigen::Triplet<double>> triplets;
+  triplets.reserve(18 * m.family.directed_bond_count());
+  for (std::size_t i = 0; i < m.size(); ++i) {
+    for_each_linearised_bond(m, i, BrokenBonds::left_out, [&](const LinearisedBond& b) {
+      if (b.stiffness == 0.0) {
+        return; // bonds between two dependants carry no energy (ghost_layers.hpp)
+      }
+      for (std::size_t a = 0; a < 3; ++a) {
+        for (std::size_t c = 0; c < 3; ++c) {
+          const double k = b.stiffness * b.direction[a] * b.direction[c];
+          const auto row = static_cast<Eigen::Index>(3 * i + a);
+          triplets.emplace_back(row, static_cast<Eigen::Index>(3 * i + c), k);
+          triplets.emplace_back(row, static_cast<Eigen::Index>(3 * b.neighbour + c), -k);
+        }
+      }
+    });
+  }
+  Sparse K(ndof, ndof);
+  K.setFromTriplets(triplets.begin(), triplets.end());
+  triplets.clear();
+  triplets.shrink_to_fit();
+
+  std::vector<Eigen::Triplet<double>> a_entries;
+  std::vector<Eigen::Triplet<double>> b_entries;
+  Eigen::VectorXd known = Eigen::VectorXd::Zero(ndof);
+  for (std::size_t g = 0; g < d.kind.size(); ++g) {
+    const auto row = static_cast<Eigen::Index>(g);
+    if (d.kind[g] == 0) {
+      a_entries.emplace_back(row, d.free_index[g], 1.0);
+      b_entries.emplace_back(row, d.free_index[g], 1.0);
+    } else if (d.kind[g] == 1) {
+      known[row] = d.prescribed[g];
+    } else {
+      for (const DofMap::Term& t : d.terms[g]) {
+        if (d.kind[t.dof] == 0) {
+          a_entries.emplace_back(row, d.free_index[t.dof], t.coefficient);
+          if (d.folds_row[g]) {
+            b_entries.emplace_back(row, d.free_index[t.dof],
+                                   t.coefficient * volume[g / 3] / volume[t.dof / 3]);
+          }
+        } else {
+          known[row] += t.coefficient * d.prescribed[t.dof];
+        }
+      }
+    }
+  }
+  Sparse A(ndof, n);
+  A.setFromTriplets(a_entries.begin(), a_entries.end());
+  Sparse B(ndof, n);
+  B.setFromTriplets(b_entries.begin(), b_entries.end());
+
+  Eigen::VectorXd load = Eigen::VectorXd::Zero(ndof);
+  const std::vector<double>& ext = m.external_force_density;
+  for (std::size_t g = 0; g < ext.size(); ++g) {
+    load[static_cast<Eigen::Index>(g)] = ext[g];
+  }
+  rhs = B.transpose() * (load - K * known);
+  const Sparse KA = K * A;
+  Sparse reduced = B.transpose() * KA;
+  reduced.prune(0.0);
+  reduced.makeCompressed();
+  const Eigen::SparseMatrix<double, Eigen::RowMajor> rows = reduced;
+  StaticSystem system;
+  system.unknowns = free_dofs;
+  system.row_offsets.assign(1, 0);
+  for (Eigen::Index r = 0; r < rows.outerSize(); ++r) {
+    const double v = volume[free_dofs[static_cast<std::size_t>(r)] / 3];
+    for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator it(rows, r); it; ++it) {
+      system.columns.push_back(static_cast<int>(it.col()));
+      system.values.push_back(v * it.value());
+    }
+    system.row_offsets.push_back(static_cast<int>(system.columns.size()));
+    system.rhs.push_back(v * rhs[r]);
+  }
+  return system;
+}
+
+/// K as the factorisations take it, compressed by columns; the rows are freed. A symmetric K's
+/// rows are its columns (Kᵀ = K to round-off); otherwise the rows are transposed into columns.
+Eigen::SparseMatrix<double> column_major(StaticSystem system, bool symmetric) {
+  const auto n = static_cast<Eigen::Index>(system.size());
+  const auto nnz = static_cast<Eigen::Index>(system.values.size());
+  if (symmetric) {
+    return Eigen::Map<const Eigen::SparseMatrix<double, Eigen::ColMajor, int>>(
+        n, n, nnz, system.row_offsets.data(), system.columns.data(), system.values.data());
+  }
+  return Eigen::Map<const Eigen::SparseMatrix<double, Eigen::RowMajor, int>>(
+      n, n, nnz, system.row_offsets.data(), system.columns.data(), system.values.data());
+}
+
 class StaticSolver final : public Integrator {
 public:
   StaticSolver(Model& model, ForceEvaluator& forces) : model_(model), forces_(forces) {
@@ -125,95 +235,20 @@ public:
   Json summary() const override { return details_; }
 
 private:
-  /// K (free × free, per unit volume) and the right-hand side. With u = A u_f + u_p (A maps the
-  /// unknowns to every dof: free dofs themselves, dependants through their terms; u_p holds the
-  /// prescribed values and what dependants take from prescribed sources) and B the map of
-  /// equations (free rows themselves; a dependant whose forces fold sends its row to its sources
-  /// with a V_d / V_s, as fold_mirror_forces does), the system is Bᵀ K A u_f = Bᵀ (b_ext − K u_p):
-  /// Aᵀ K A, symmetric, when every dependant folds; K_ff + K_fd A under `copy` mirrors.
-  Eigen::SparseMatrix<double> assemble(const DofMap& d, Eigen::VectorXd& rhs) const {
-    using Sparse = Eigen::SparseMatrix<double>;
-    const auto ndof = static_cast<Eigen::Index>(3 * model_.size());
-    const auto n = static_cast<Eigen::Index>(d.free_dofs.size());
-    const auto& volume = model_.particles.volume;
-
-    std::vector<Eigen::Triplet<double>> triplets;
-    triplets.reserve(18 * model_.family.directed_bond_count());
-    for (std::size_t i = 0; i < model_.size(); ++i) {
-      for_each_linearised_bond(model_, i, BrokenBonds::left_out, [&](const LinearisedBond& b) {
-        if (b.stiffness == 0.0) {
-          return; // bonds between two dependants carry no energy (ghost_layers.hpp)
-        }
-        for (std::size_t a = 0; a < 3; ++a) {
-          for (std::size_t c = 0; c < 3; ++c) {
-            const double k = b.stiffness * b.direction[a] * b.direction[c];
-            const auto row = static_cast<Eigen::Index>(3 * i + a);
-            triplets.emplace_back(row, static_cast<Eigen::Index>(3 * i + c), k);
-            triplets.emplace_back(row, static_cast<Eigen::Index>(3 * b.neighbour + c), -k);
-          }
-        }
-      });
-    }
-    Sparse K(ndof, ndof);
-    K.setFromTriplets(triplets.begin(), triplets.end());
-    triplets.clear();
-    triplets.shrink_to_fit();
-
-    std::vector<Eigen::Triplet<double>> a_entries;
-    std::vector<Eigen::Triplet<double>> b_entries;
-    Eigen::VectorXd known = Eigen::VectorXd::Zero(ndof);
-    for (std::size_t g = 0; g < d.kind.size(); ++g) {
-      const auto row = static_cast<Eigen::Index>(g);
-      if (d.kind[g] == 0) {
-        a_entries.emplace_back(row, d.free_index[g], 1.0);
-        b_entries.emplace_back(row, d.free_index[g], 1.0);
-      } else if (d.kind[g] == 1) {
-        known[row] = d.prescribed[g];
-      } else {
-        for (const DofMap::Term& t : d.terms[g]) {
-          if (d.kind[t.dof] == 0) {
-            a_entries.emplace_back(row, d.free_index[t.dof], t.coefficient);
-            if (d.folds_row[g]) {
-              b_entries.emplace_back(row, d.free_index[t.dof],
-                                     t.coefficient * volume[g / 3] / volume[t.dof / 3]);
-            }
-          } else {
-            known[row] += t.coefficient * d.prescribed[t.dof];
-          }
-        }
-      }
-    }
-    Sparse A(ndof, n);
-    A.setFromTriplets(a_entries.begin(), a_entries.end());
-    Sparse B(ndof, n);
-    B.setFromTriplets(b_entries.begin(), b_entries.end());
-
-    Eigen::VectorXd load = Eigen::VectorXd::Zero(ndof);
-    const std::vector<double>& ext = model_.external_force_density;
-    for (std::size_t g = 0; g < ext.size(); ++g) {
-      load[static_cast<Eigen::Index>(g)] = ext[g];
-    }
-    rhs = B.transpose() * (load - K * known);
-    const Sparse KA = K * A;
-    Sparse reduced = B.transpose() * KA;
-    reduced.prune(0.0);
-    reduced.makeCompressed();
-    return reduced;
-  }
-
   void solve(State& st) {
     using clock = std::chrono::steady_clock;
     const auto t0 = clock::now();
     const DofMap d = map_dofs(model_);
     const auto n = static_cast<Eigen::Index>(d.free_dofs.size());
     const std::vector<double>& ext = model_.external_force_density;
-    Eigen::VectorXd rhs;
-    const Eigen::SparseMatrix<double> K = assemble(d, rhs);
+    StaticSystem system = assemble(model_, d);
     const auto t1 = clock::now();
-    const Eigen::SparseMatrix<double> Kt = K.transpose();
-    const double asym = (K - Kt).norm() / std::max(K.norm(), 1e-300);
+    const double asym = system.asymmetry();
+    const auto t_check = clock::now();
     const bool symmetric = asym <= 1e-12;
-
+    const std::size_t nonzeros = system.values.size();
+    const Eigen::VectorXd rhs = Eigen::Map<const Eigen::VectorXd>(system.rhs.data(), n);
+    const Eigen::SparseMatrix<double> K = column_major(std::move(system), symmetric);
     const std::unique_ptr<SparseFactorisation> factor = factorise(K, symmetric);
     const auto t2 = clock::now();
     auto solve_with = [&](const Eigen::VectorXd& b) { return factor->solve(b); };
@@ -239,7 +274,7 @@ private:
       Eigen::VectorXd r(n);
       for (Eigen::Index k = 0; k < n; ++k) {
         const std::size_t g = d.free_dofs[static_cast<std::size_t>(k)];
-        r[k] = st.force[g] + (ext.empty() ? 0.0 : ext[g]);
+        r[k] = model_.particles.volume[g / 3] * (st.force[g] + (ext.empty() ? 0.0 : ext[g]));
       }
       residual = r.norm() / std::max(load, 1e-300);
       // Converged, or at the round-off floor of the force sums (the residual stops falling; a
@@ -260,20 +295,21 @@ private:
     j["symmetric"] = symmetric;
     j["asymmetry"] = asym;
     j["unknowns"] = static_cast<std::size_t>(n);
-    j["nonzeros"] = static_cast<std::size_t>(K.nonZeros());
+    j["nonzeros"] = nonzeros;
     j["factor_nonzeros"] = factor->factor_nonzeros();
     j["factor_bytes"] = factor->factor_bytes();
     j["assembly_seconds"] = s(t0, t1);
-    j["factorisation_seconds"] = s(t1, t2);
+    j["symmetry_check_seconds"] = s(t1, t_check);
+    j["factorisation_seconds"] = s(t_check, t2);
     j["newton_seconds"] = s(t2, t3);
     j["newton_iterations"] = iterations;
     j["residual"] = residual;
     report_ = fmt::format(
         "static solve: {} unknowns, {} nonzeros, {} ({} operator, ‖K−Kᵀ‖/‖K‖ = {:.1e}); "
-        "assembly {:.3f} s, factorisation {:.3f} s (factor {} nonzeros, {:.1f} MiB), {} Newton "
-        "iterations {:.3f} s, residual {:.2e} of the load",
-        n, K.nonZeros(), factor->name(), symmetric ? "symmetric" : "nonsymmetric", asym, s(t0, t1),
-        s(t1, t2), factor->factor_nonzeros(),
+        "assembly {:.3f} s, symmetry check {:.3f} s, factorisation {:.3f} s (factor {} nonzeros, "
+        "{:.1f} MiB), {} Newton iterations {:.3f} s, residual {:.2e} of the load",
+        n, nonzeros, factor->name(), symmetric ? "symmetric" : "nonsymmetric", asym, s(t0, t1),
+        s(t1, t_check), s(t_check, t2), factor->factor_nonzeros(),
         static_cast<double>(factor->factor_bytes()) / (1024.0 * 1024.0), iterations, s(t2, t3),
         residual);
     if (residual > acceptable_residual) {
@@ -294,6 +330,41 @@ private:
 };
 
 } // namespace
+
+void StaticSystem::multiply(const double* x, double* y) const {
+  for (std::size_t r = 0; r < size(); ++r) {
+    double sum = 0;
+    for (auto q = static_cast<std::size_t>(row_offsets[r]);
+         q < static_cast<std::size_t>(row_offsets[r + 1]); ++q) {
+      sum += values[q] * x[columns[q]];
+    }
+    y[r] = sum;
+  }
+}
+
+double StaticSystem::asymmetry() const {
+  // Each entry against its mirror image, found by bisection in the sorted row of its column.
+  double diff = 0, norm = 0;
+  for (std::size_t r = 0; r < size(); ++r) {
+    for (auto q = static_cast<std::size_t>(row_offsets[r]);
+         q < static_cast<std::size_t>(row_offsets[r + 1]); ++q) {
+      const auto c = static_cast<std::size_t>(columns[q]);
+      const auto first = columns.begin() + row_offsets[c],
+                 last = columns.begin() + row_offsets[c + 1];
+      const auto at = std::lower_bound(first, last, static_cast<int>(r));
+      const bool stored = at != last && *at == static_cast<int>(r);
+      const double mirror = stored ? values[static_cast<std::size_t>(at - columns.begin())] : 0.0;
+      // A pair stored both ways is met twice; an entry whose image is a zero only once.
+      diff += (stored ? 1.0 : 2.0) * (values[q] - mirror) * (values[q] - mirror);
+      norm += values[q] * values[q];
+    }
+  }
+  return std::sqrt(diff / std::max(norm, 1e-300));
+}
+
+StaticSystem assemble_static_system(const Model& model) {
+  return assemble(model, map_dofs(model));
+}
 
 std::unique_ptr<Integrator> make_static_solver(const IntegratorSettings&, Model& model,
                                                ForceEvaluator& forces) {

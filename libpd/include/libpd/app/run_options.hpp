@@ -32,6 +32,9 @@ struct RunOptions {
   /// may differ. The restored probe history continues, so probes.csv ends as an uninterrupted
   /// run's.
   std::filesystem::path restart;
+  /// Seconds the caller took to read the scene (the lattice of a scene with mirror supports is
+  /// generated there), reported with the set-up times; 0 if unknown.
+  double scene_seconds = 0;
 };
 
 } // namespace pd

@@ -18,7 +18,12 @@ namespace pd {
 
 struct RunOutcome {
   RunResult result;
+  /// Set-up: from the start of run_scene to the first step (output folder, model, simulation,
+  /// restored checkpoint); its parts below. The run's solve time is result.wall_seconds.
   double setup_seconds = 0;
+  double model_seconds = 0; ///< build_model: bonds, corrections, supports, bond fields
+  double simulation_seconds =
+      0; ///< Simulation: force evaluator, stable Δt, the integrator's set-up
   std::size_t particles = 0;
   std::size_t bonds = 0;
   std::map<std::string, double> probes;

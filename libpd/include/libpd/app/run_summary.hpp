@@ -1,6 +1,7 @@
 // summary.json of a run: what was run (scene, sizes, integrator, kernel, effects), how it ended
-// (status, steps, energies, residual), its cost (wall time, bond updates per second, memory), the
-// final probe values and the checkpoint/restart it wrote or continued from.
+// (status, steps, energies, residual), its cost (set-up and solve time, bond updates per second,
+// memory, peak resident memory), the final probe values and the checkpoint/restart it wrote or
+// continued from.
 #pragma once
 
 #include "libpd/app/run_options.hpp"
@@ -9,7 +10,12 @@
 #include "libpd/io/scene.hpp"
 #include "libpd/time/simulation.hpp"
 
+#include <cstdint>
+
 namespace pd {
+
+/// The process's peak resident set size (VmHWM of /proc/self/status) in bytes; 0 if unknown.
+std::uint64_t peak_resident_bytes();
 
 Json run_summary(const Scene& scene, const Simulation& sim, const RunOutcome& out,
                  const RunOptions& options);
