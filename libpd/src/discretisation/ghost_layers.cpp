@@ -239,10 +239,4 @@ ExtrapolatedParticles extrapolation_ties(int dim, double spacing, const std::vec
   return ties;
 }
 
-void mark_dependants(const ExtrapolatedParticles& ties, std::vector<std::uint8_t>& flags) {
-  for (std::uint32_t d : ties.particle) {
-    flags[d] = 1;
-  }
-}
-
 } // namespace pd

@@ -25,6 +25,18 @@ std::vector<std::uint8_t> mirror_dependent_particles(std::size_t particles,
   return dependent;
 }
 
+std::vector<std::uint8_t> energy_dependants(std::size_t particles, MirrorCoupling coupling,
+                                            const std::vector<Constraint>& constraints,
+                                            const ExtrapolatedParticles& extrapolated) {
+  std::vector<std::uint8_t> dependent = consistent_mirror_coupling(coupling, constraints)
+                                            ? mirror_dependent_particles(particles, constraints)
+                                            : std::vector<std::uint8_t>(particles, 0);
+  for (const std::uint32_t d : extrapolated.particle) {
+    dependent[d] = 1;
+  }
+  return dependent;
+}
+
 std::vector<double> mirror_bond_weights(const BondFamily& family,
                                         const std::vector<std::uint8_t>& dependent) {
   std::vector<double> weight(family.directed_bond_count(), 1.0);

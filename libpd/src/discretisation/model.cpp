@@ -329,7 +329,6 @@ std::vector<double> load_force_densities(const ModelSpec& spec, const ParticleSe
   const double tol = region_tolerance(spec);
   const int dim = spec.dimension.dim;
   std::vector<double> force_density;
-  // Loads become force densities [N/m³]; a resultant is shared in proportion to particle volume.
   if (!spec.loads.empty()) {
     force_density.assign(3 * particles.size(), 0.0);
   }
@@ -445,12 +444,8 @@ Model build_model(const ModelSpec& spec, ParticleSet particles) {
         !m.extrapolated.empty()) {
       // The energy W_c of mirror_constraints.hpp and ghost_layers.hpp: bonds between a body
       // particle and a dependant count ½, bonds between two dependants 0.
-      std::vector<std::uint8_t> dependent =
-          consistent_mirror_coupling(spec.mirror_coupling, m.constraints)
-              ? mirror_dependent_particles(n, m.constraints)
-              : std::vector<std::uint8_t>(n, 0);
-      mark_dependants(m.extrapolated, dependent);
-      const auto weight = mirror_bond_weights(m.family, dependent);
+      const auto weight = mirror_bond_weights(
+          m.family, energy_dependants(n, spec.mirror_coupling, m.constraints, m.extrapolated));
       for (std::size_t k = 0; k < correction.size(); ++k) {
         correction[k] *= weight[k];
       }

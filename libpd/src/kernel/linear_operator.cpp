@@ -37,12 +37,8 @@ bool folds_dependants(const Model& model) {
 }
 
 std::vector<std::uint8_t> massless_dependants(const Model& model) {
-  std::vector<std::uint8_t> massless =
-      consistent_mirror_coupling(model)
-          ? mirror_dependent_particles(model.size(), model.constraints)
-          : std::vector<std::uint8_t>(model.size(), 0);
-  mark_dependants(model.extrapolated, massless);
-  return massless;
+  return energy_dependants(model.size(), model.spec.mirror_coupling, model.constraints,
+                           model.extrapolated);
 }
 
 std::vector<double> constraint_row_norms(const Model& model) {

@@ -76,7 +76,4 @@ ExtrapolatedParticles extrapolation_ties(int dim, double spacing, const std::vec
                                          const std::vector<std::uint32_t>& fitted,
                                          const std::vector<ClampPlane>& planes);
 
-/// Per particle: 1 for the dependants of `ties`.
-void mark_dependants(const ExtrapolatedParticles& ties, std::vector<std::uint8_t>& flags);
-
 } // namespace pd

@@ -73,6 +73,13 @@ bool consistent_mirror_coupling(MirrorCoupling coupling,
 std::vector<std::uint8_t> mirror_dependent_particles(std::size_t particles,
                                                      const std::vector<Constraint>& constraints);
 
+/// Per particle: 1 for the dependants of W_c (forces folded onto their sources, no mass, weight 0
+/// on bonds among themselves): the mirror dependants under consistent coupling and every
+/// extrapolated particle (ghost_layers.hpp).
+std::vector<std::uint8_t> energy_dependants(std::size_t particles, MirrorCoupling coupling,
+                                            const std::vector<Constraint>& constraints,
+                                            const ExtrapolatedParticles& extrapolated);
+
 /// Weight of every directed bond of `family` in W_c: (number of its ends that are not mirror
 /// dependants) / 2, i.e. 1, ½ or 0. Symmetric: bond i→j and j→i get the same weight.
 std::vector<double> mirror_bond_weights(const BondFamily& family,
