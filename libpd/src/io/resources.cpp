@@ -50,6 +50,23 @@ double sum_over_boxes(const ModelDimension& d, const LatticeSpec& lattice, const
   return sum;
 }
 
+/// The items that lie in no other one (`inside(a, b)`: a within b). Of equal items the first
+/// stays; a strictly larger one always wins. Work k² for k items.
+template <class T, class Inside>
+std::vector<T> outermost(const std::vector<T>& items, Inside inside) {
+  std::vector<T> kept;
+  for (std::size_t i = 0; i < items.size(); ++i) {
+    bool redundant = false;
+    for (std::size_t j = 0; j < items.size() && !redundant; ++j) {
+      redundant = j != i && inside(items[i], items[j]) && (j < i || !inside(items[j], items[i]));
+    }
+    if (!redundant) {
+      kept.push_back(items[i]);
+    }
+  }
+  return kept;
+}
+
 /// Lattice sites outside a box within the horizon of its points (ghost_layers.hpp): a site whose
 /// distances beyond the box's faces are (a_x, a_y, a_z) layers (0 where it lies within the box's
 /// range) is within the horizon of the box's nearest point iff Σ a² is, and there are
@@ -87,22 +104,17 @@ double ghost_sites_around_box(const ModelDimension& d, const LatticeSpec& lattic
 /// Work (m + 1)^dim per box, m capped by the scene checks.
 double ghost_sites_around_union(const ModelDimension& d, const LatticeSpec& lattice,
                                 HorizonRule rule, const Region& all) {
-  const auto& boxes = all.boxes;
-  double ghosts = 0;
-  for (std::size_t i = 0; i < boxes.size(); ++i) {
-    bool nested = false;
-    for (std::size_t j = 0; j < boxes.size() && !nested; ++j) {
-      bool inside = j != i;
-      bool same = true;
-      for (int a = 0; a < d.dim && inside; ++a) {
-        inside = boxes[i].lo[a] >= boxes[j].lo[a] && boxes[i].hi[a] <= boxes[j].hi[a];
-        same = same && boxes[i].lo[a] == boxes[j].lo[a] && boxes[i].hi[a] == boxes[j].hi[a];
+  const auto inside = [&](const Box& a, const Box& b) {
+    for (int ax = 0; ax < d.dim; ++ax) {
+      if (a.lo[ax] < b.lo[ax] || a.hi[ax] > b.hi[ax]) {
+        return false;
       }
-      nested = inside && (!same || j < i);
     }
-    if (!nested) {
-      ghosts += ghost_sites_around_box(d, lattice, rule, boxes[i]);
-    }
+    return true;
+  };
+  double ghosts = 0;
+  for (const Box& box : outermost(all.boxes, inside)) {
+    ghosts += ghost_sites_around_box(d, lattice, rule, box);
   }
   return ghosts;
 }
@@ -167,18 +179,7 @@ double lattice_points_in_union(const ModelDimension& d, const LatticeSpec& latti
     }
     return true;
   };
-  std::vector<std::array<Interval, 3>> kept;
-  for (std::size_t i = 0; i < boxes.size(); ++i) {
-    bool redundant = false;
-    for (std::size_t j = 0; j < boxes.size() && !redundant; ++j) {
-      // Of two equal boxes the later one is dropped; a strictly larger one always wins.
-      redundant = j != i && inside(boxes[i], boxes[j]) && (j < i || !inside(boxes[j], boxes[i]));
-    }
-    if (!redundant) {
-      kept.push_back(boxes[i]);
-    }
-  }
-  boxes = std::move(kept);
+  boxes = outermost(boxes, inside);
   // Coordinate compression: the box interval ends cut every axis into at most 2k − 1 slabs; a
   // cell of slabs is either inside a box or not, so the union is the sum of the covered cells.
   // Cost (2k)^dim · k, kept below 2·10^7 operations; beyond it the sum over the boxes, which
