@@ -101,20 +101,18 @@ DofMap map_dofs(const Model& m) {
 /// The system in force units (each equation of particle i times V_i). With u = A u_f + u_p (A maps
 /// the unknowns to every dof: free dofs themselves, dependants through their terms; u_p holds the
 /// prescribed values and what dependants take from prescribed sources) and B the map of equations
-/// (free rows themselves; a dependant whose forces fold sends its row to its sources with
-/// a V_d / V_s, as fold_mirror_forces does), it is Bᵀ K A u_f = Bᵀ (b_ext − K u_p), each row
-/// then times its particle's volume: Aᵀ (V K) A, symmetric, when every dependant folds; K_ff +
-/// K_fd A under `copy` mirrors. Sparse products, not per-bond folding: an extrapolated particle
+/// (a free row times its particle's volume; a dependant whose forces fold sends its row, times
+/// its own volume, to its sources with its coefficients, as fold_mirror_forces does), it is
+/// Bᵀ K A u_f = Bᵀ (b_ext − K u_p): Aᵀ (V K) A, symmetric, when every dependant folds; V (K_ff +
+/// K_fd A) under `copy` mirrors. Sparse products, not per-bond folding: an extrapolated particle
 /// has ~20 sources, and a bond between two of them would otherwise add 20² entries.
 StaticSystem assemble(const Model& m, const DofMap& d) {
-  const auto& free_dofs = d.free_dofs;
-  Eigen::VectorXd rhs;
-
   using Sparse = Eigen::SparseMatrix<double>;
   const auto ndof = static_cast<Eigen::Index>(3 * m.size());
   const auto n = static_cast<Eigen::Index>(d.free_dofs.size());
   const auto& volume = m.particles.volume;
 
+  // K per unit volume over every dof.
   std::vector<Eigen::Triplet<double>> triplets;
   triplets.reserve(18 * m.family.directed_bond_count());
   for (std::size_t i = 0; i < m.size(); ++i) {
@@ -137,6 +135,7 @@ StaticSystem assemble(const Model& m, const DofMap& d) {
   triplets.clear();
   triplets.shrink_to_fit();
 
+  // A (columns) and B (equations, in force units: V_g for a free row, a·V_d for a folded one).
   std::vector<Eigen::Triplet<double>> a_entries;
   std::vector<Eigen::Triplet<double>> b_entries;
   Eigen::VectorXd known = Eigen::VectorXd::Zero(ndof);
@@ -144,7 +143,7 @@ StaticSystem assemble(const Model& m, const DofMap& d) {
     const auto row = static_cast<Eigen::Index>(g);
     if (d.kind[g] == 0) {
       a_entries.emplace_back(row, d.free_index[g], 1.0);
-      b_entries.emplace_back(row, d.free_index[g], 1.0);
+      b_entries.emplace_back(row, d.free_index[g], volume[g / 3]);
     } else if (d.kind[g] == 1) {
       known[row] = d.prescribed[g];
     } else {
@@ -152,8 +151,7 @@ StaticSystem assemble(const Model& m, const DofMap& d) {
         if (d.kind[t.dof] == 0) {
           a_entries.emplace_back(row, d.free_index[t.dof], t.coefficient);
           if (d.folds_row[g]) {
-            b_entries.emplace_back(row, d.free_index[t.dof],
-                                   t.coefficient * volume[g / 3] / volume[t.dof / 3]);
+            b_entries.emplace_back(row, d.free_index[t.dof], t.coefficient * volume[g / 3]);
           }
         } else {
           known[row] += t.coefficient * d.prescribed[t.dof];
@@ -171,24 +169,16 @@ StaticSystem assemble(const Model& m, const DofMap& d) {
   for (std::size_t g = 0; g < ext.size(); ++g) {
     load[static_cast<Eigen::Index>(g)] = ext[g];
   }
-  rhs = B.transpose() * (load - K * known);
-  const Sparse KA = K * A;
-  Sparse reduced = B.transpose() * KA;
+  const Eigen::VectorXd rhs = B.transpose() * (load - K * known);
+  Eigen::SparseMatrix<double, Eigen::RowMajor> reduced = B.transpose() * (K * A);
   reduced.prune(0.0);
   reduced.makeCompressed();
-  const Eigen::SparseMatrix<double, Eigen::RowMajor> rows = reduced;
   StaticSystem system;
-  system.unknowns = free_dofs;
-  system.row_offsets.assign(1, 0);
-  for (Eigen::Index r = 0; r < rows.outerSize(); ++r) {
-    const double v = volume[free_dofs[static_cast<std::size_t>(r)] / 3];
-    for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator it(rows, r); it; ++it) {
-      system.columns.push_back(static_cast<int>(it.col()));
-      system.values.push_back(v * it.value());
-    }
-    system.row_offsets.push_back(static_cast<int>(system.columns.size()));
-    system.rhs.push_back(v * rhs[r]);
-  }
+  system.unknowns = d.free_dofs;
+  system.row_offsets.assign(reduced.outerIndexPtr(), reduced.outerIndexPtr() + n + 1);
+  system.columns.assign(reduced.innerIndexPtr(), reduced.innerIndexPtr() + reduced.nonZeros());
+  system.values.assign(reduced.valuePtr(), reduced.valuePtr() + reduced.nonZeros());
+  system.rhs.assign(rhs.data(), rhs.data() + n);
   return system;
 }
 
