@@ -109,7 +109,9 @@ void check_solver(Reader& r, const Scene& scene, const Marks& marks) {
   } else if (sol.has("arkode")) {
     r.warn(sol.find("arkode")->name, "'solver.arkode' is ignored: the integrator is not 'arkode'");
   }
-  if (!solver.end_time && !solver.steady.enabled) {
+  // The static solver stops by itself after one solve; the explicit schemes need a stop.
+  if (solver.integrator != IntegratorKind::static_solve && !solver.end_time &&
+      !solver.steady.enabled) {
     r.fail(sol.anchor,
            "neither 'solver.end_time' nor 'solver.steady' is given: the run would not "
            "stop",
