@@ -9,6 +9,7 @@ Json run_bond_count(const Context& ctx);
 Json run_bar_vibration(const Context& ctx);
 Json run_bar_energy(const Context& ctx);
 Json run_block_tension(const Context& ctx);
+Json run_block_tension_thin(const Context& ctx);
 Json run_patch_test(const Context& ctx);
 Json run_block_tension_corrections(const Context& ctx);
 Json run_clamped_beam(const Context& ctx);

@@ -40,6 +40,9 @@ const std::vector<Case>& all_cases() {
        run_bar_energy},
       {"block-tension", "3D block under 200 MPa: elongation and lateral contraction vs sigma/E",
        run_block_tension},
+      {"block-tension-thin",
+       "block-tension with 5 particles across the section (lambda = 0.02 m): the same gates",
+       run_block_tension_thin},
       {"patch-test",
        "uniform strain on a block: PD/classical energy density by particle class, every surface x "
        "volume correction",
