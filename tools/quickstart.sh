@@ -16,11 +16,15 @@ case "$mode" in
 esac
 cd "$(dirname "$0")/.."
 
+# libopenblas0-openmp becomes the system BLAS/LAPACK through Debian's alternatives: CHOLMOD's
+# supernodal factorisation (integrator: static) runs 5x faster than on the reference BLAS
+# (block-tension: 45 s -> 8.4 s, 1 thread), and its threads are OpenMP's like libpd's.
 packages=(
   build-essential cmake ninja-build pkg-config git
   libeigen3-dev libyaml-cpp-dev libcli11-dev libfmt-dev
   libgtest-dev libgmock-dev libbenchmark-dev libhwy-dev
   libsundials-dev libdeal.ii-dev libsuitesparse-dev
+  libopenblas0-openmp
   python3 python3-matplotlib python3-yaml chromium
 )
 if [[ $mode == report ]]; then
