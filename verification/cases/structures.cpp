@@ -287,7 +287,7 @@ void set_spacing(Scene& scene, double spacing) {
   scene.model.lattice.spacing = spacing;
   for (LoadSpec& l : scene.model.loads) {
     for (Box& b : l.load.region.boxes) {
-      if (b.hi[2] - b.lo[2] < old) { // a single top layer: keep it a single layer
+      if (b.hi[2] - b.lo[2] <= old * (1 + 1e-9)) { // a single top layer: keep it one layer
         b.lo[2] = b.hi[2] - 0.5 * spacing;
       }
     }
