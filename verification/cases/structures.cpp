@@ -657,6 +657,13 @@ Json run_structure_sweep(const Context& ctx, const std::string& case_name) {
 
 } // namespace
 
+Json run_structure_case(const Context& ctx, const std::string& case_name, bool fast) {
+  return run_structure(ctx, case_name, fast);
+}
+Json run_structure_sweep_case(const Context& ctx, const std::string& case_name) {
+  return run_structure_sweep(ctx, case_name);
+}
+
 Json run_clamped_beam(const Context& ctx) {
   return run_structure(ctx, "clamped-beam", false);
 }

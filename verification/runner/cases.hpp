@@ -21,6 +21,10 @@ Json run_plate_fast(const Context& ctx);
 Json run_clamped_beam_sweep(const Context& ctx);
 Json run_cantilever_sweep(const Context& ctx);
 Json run_plate_sweep(const Context& ctx);
+/// A structure described by verification/cases/NAME.case.yaml: at the scene's resolution
+/// (`fast`: the case's CI spacing, regression and gates, no relaxation rerun), or its sweep.
+Json run_structure_case(const Context& ctx, const std::string& case_name, bool fast);
+Json run_structure_sweep_case(const Context& ctx, const std::string& case_name);
 Json run_rc_beam(const Context& ctx);
 Json run_compression_cube(const Context& ctx);
 
