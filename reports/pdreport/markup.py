@@ -24,7 +24,8 @@ nav a{margin-right:12px} .tw{overflow-x:auto;max-width:100%}
 #scorecard-table{width:100%;font-size:13px} #scorecard-table td{overflow-wrap:anywhere}
 #scorecard-table td.num{overflow-wrap:normal} #scorecard-table td.case{white-space:nowrap}
 #scorecard-table td.kind{color:#555;font-size:12px} #scorecard-table td.gate-text{font-size:12px;
- color:#444;max-width:260px} td.over{color:#b3141a;font-weight:600}
+ color:#444;max-width:260px} #scorecard-table td.gate{white-space:nowrap}
+td.over{color:#b3141a;font-weight:600}
 td.verdict{font-weight:700;text-align:center;white-space:nowrap}
 .v-pass{background:#e2f4e5;color:#0a7a28} .v-fail{background:#fde2e2;color:#b3141a}
 .v-info{background:#f1f1f4;color:#555}

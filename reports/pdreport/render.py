@@ -18,7 +18,7 @@ from .metrics import metrics
 from .page import Page
 
 SECTIONS = (("scorecard", "Scorecard"), ("environment", "Environment"), ("summary", "Summary"),
-            ("deflections", "Deflections"),
+            ("convergence", "Convergence"), ("deflections", "Deflections"),
             ("accuracy", "Accuracy vs time"), ("integrators", "Integrators"),
             ("performance", "Performance"), ("cases", "Cases"), ("stages", "Stages"))
 

@@ -99,7 +99,7 @@ def structure_lines(d: dict) -> list[Line]:
     if drifts:
         worst, tol = max(drifts, key=lambda p: p[0])
         lines.append(Line("change vs stored value", kind="stored (case file)", error=worst,
-                          gate=f"≤ {fnum(tol, 2)}" if R.is_number(tol) else "",
+                          gate=f"≤ {pct(tol)}" if R.is_number(tol) else "",
                           within=worst <= tol if R.is_number(tol) else None))
     return lines
 
@@ -174,7 +174,7 @@ def find_values(d: dict, a: str, b: str) -> tuple[object, object]:
 def sweep_entry(page: Page, case: str) -> Entry:
     base = case.removesuffix("-sweep")
     rec = page.rec.get(f"sweep:{base}")
-    anchor = "accuracy"
+    anchor = f"convergence-{base}"
     if rec is None:
         return Entry(case, "not-run", note="<i>sweep not run in this report: <code>--full</code> runs it</i>")
     if not R.ok(rec):
@@ -183,7 +183,8 @@ def sweep_entry(page: Page, case: str) -> Entry:
     rows = rec["result"]["rows"]
     reduced = " (reduced)" if rec["result"].get("reduced") else ""
     return Entry(case, "measured", wall=rec.get("seconds"), anchor=anchor,
-                 note=f'{len(rows)} runs{reduced}: <a href="#{anchor}">accuracy vs time</a>')
+                 note=f'{len(rows)} runs{reduced}: <a href="#{anchor}">convergence in λ</a>, '
+                      f'<a href="#old-pairs-{base}">old correction pairs</a>')
 
 
 def short_text(s: object, n: int) -> str:
@@ -228,7 +229,7 @@ def rows_html(e: Entry) -> str:
             if i == 0:
                 cells.append(f'<td class="gate-text"{span}>{esc(e.gate_text)}</td>')
         else:
-            cells.append(f"<td{over}>{esc(line.gate) or '–'}</td>")
+            cells.append(f'<td class="gate{" over" if line.within is False else ""}">{esc(line.gate) or "–"}</td>')
         attrs = f'data-case="{esc(e.case)}"' if i == 0 else f'data-case-line="{esc(e.case)}"'
         out.append(f"<tr {attrs}>" + (head if i == 0 else "") + "".join(cells) +
                    (tail if i == 0 else "") + "</tr>")

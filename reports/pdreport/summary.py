@@ -2,7 +2,7 @@
 and Miranda's own PD–FE agreement, with the gate and its verdict."""
 from __future__ import annotations
 
-from . import scorecard
+from . import convergence, scorecard
 from . import records as R
 from .cases import in_listed_order
 from .fmt import esc, fnum, pct, short
@@ -39,7 +39,7 @@ def section(page: Page) -> str:
     if not verify:
         return ('<section id="summary"><h2>Summary</h2>' +
                 failed_box(None, "pd verify (no verification stage ran)") +
-                table(HEAD, [], 'id="summary-table"') + "</section>")
+                table(HEAD, [], 'id="summary-table"') + convergence.section_parts(page) + "</section>")
     levels = ", ".join(f"{c} {pct(page.cases[c].paper_agreement)}"
                        for c in in_listed_order(page.cases, listed) if page.cases[c].paper_agreement)
     note = ("<p class=\"note\">Errors are signed and relative, (PD − reference)/reference. FE = "
@@ -53,8 +53,9 @@ def section(page: Page) -> str:
     fails = [n for n, r in verify.items() if R.ok(r) and not r["result"].get("passed")]
     failtxt = (f"<p class=\"fail\">Gates failing: {esc(', '.join(f.split(':')[1] for f in fails))}</p>"
                if fails else "<p class=\"pass\">All gates that ran passed.</p>")
-    return ('<section id="summary"><h2>Summary</h2>' + failtxt + note +
-            table(HEAD, rows, 'id="summary-table"', attrs) + "</section>")
+    return ('<section id="summary"><h2>Summary</h2>' + failtxt + treatment(page) + note +
+            table(HEAD, rows, 'id="summary-table"', attrs) + convergence.section_parts(page) +
+            "</section>")
 
 
 def sweep_summary_row(page: Page, case: str) -> list[str]:
@@ -68,7 +69,8 @@ def sweep_summary_row(page: Page, case: str) -> list[str]:
     res = rec["result"]
     pts = [(R.sweep_error(r), r) for r in res["rows"] if R.sweep_error(r) is not None]
     best = min(pts, key=lambda p: p[0]) if pts else None
-    txt = f'<a href="#accuracy">accuracy-vs-time sweep</a>: {len(res["rows"])} runs' + (
+    txt = (f'<a href="#accuracy">accuracy-vs-time sweep</a> (<a href="#convergence-{esc(base)}">'
+           f'convergence in λ</a>): {len(res["rows"])} runs') + (
         " (reduced)" if res.get("reduced") else "")
     if best:
         txt += f'; best {esc(best[1].get("knob"))} = {esc(short(best[1].get("knob_value")))}'
@@ -133,3 +135,20 @@ def structure_row(page: Page, case: str, d: dict, quantity: str) -> list[str]:
     return [f"<b>{esc(case)}</b>", quantity, num_td("<br>".join(pd_l)), num_td("<br>".join(fe_l)),
             num_td("<br>".join(an_l)), num_td("<br>".join(efe_l)), num_td("<br>".join(ean_l)),
             num_td(paper), size_td(d)]
+
+
+def treatment(page: Page) -> str:
+    """The corrections the structural cases ran with, as their JSON reports them."""
+    used = {}
+    for case in page.cases:
+        rec = page.rec.get(f"verify:{case}")
+        s = (rec or {}).get("result", {}).get("settings", {}) if R.ok(rec) else {}
+        if "surface_correction" in s:
+            used[case] = (f"{s['surface_correction']} + {s['volume_correction']}, "
+                          f"{s.get('mirror_coupling', '?')} clamps")
+    if not used:
+        return ""
+    return ('<p class="reading">Structural cases ran with: ' +
+            "; ".join(f"{esc(c)} {esc(t)}" for c, t in used.items()) +
+            " (surface + volume correction, mirror coupling): the errors below are those of "
+            "this treatment; the old pairs are sweep rows further down.</p>")
