@@ -25,12 +25,13 @@ nav a{margin-right:12px} .tw{overflow-x:auto;max-width:100%}
 #scorecard-table td.num{overflow-wrap:normal} #scorecard-table td.case{white-space:nowrap}
 #scorecard-table td.kind{color:#555;font-size:12px} #scorecard-table td.gate-text{font-size:12px;
  color:#444;max-width:260px} #scorecard-table td.gate{white-space:nowrap}
-td.over{color:#b3141a;font-weight:600}
+td.over{color:#b3141a;font-weight:600} #summary-table{font-size:12px} td .wrap{white-space:normal;display:inline-block}
 td.verdict{font-weight:700;text-align:center;white-space:nowrap}
 .v-pass{background:#e2f4e5;color:#0a7a28} .v-fail{background:#fde2e2;color:#b3141a}
 .v-info{background:#f1f1f4;color:#555}
 .cases{display:flex;flex-wrap:wrap;gap:6px 18px} .case{flex:1 1 380px;min-width:0}
-table.kv{font-size:12px} table.kv td{overflow-wrap:anywhere} details{margin:4px 0 10px}
+table.kv{font-size:12px;width:100%;table-layout:fixed} table.kv td{overflow-wrap:anywhere}
+table.kv td:first-child{width:55%} details{margin:4px 0 10px}
 """
 
 CHECK_SCRIPT = """

@@ -76,7 +76,7 @@ def case_entry(page: Page, case: str, d: dict) -> Entry:
         lines = gated_lines(case, d)
     text = gate if isinstance(gate, str) else ""
     if not lines:
-        lines = reported_lines(case, d) or [Line(short_text(d.get("quantity", ""), 70))]
+        lines = reported_lines(case, d) or [Line(short_text(d.get("quantity", ""), 48))]
     verdict = ("measured" if text.startswith("none") else "pass" if d.get("passed") else "fail")
     return Entry(case, verdict, lines, gate_text=text, wall=d.get("wall_seconds"),
                  anchor=f"case-{case}")
@@ -243,7 +243,7 @@ def section(page: Page) -> str:
               f"{len(es)} cases: {count['pass']} pass, {count['fail']} fail"
               + (f", {count['stage-failed']} failed to run" if count["stage-failed"] else "")
               + f", {count['measured']} measurements without a gate, {count['not-run']} not run "
-              "in this mode.</p>")
+              "in this report.</p>")
     head = ("<tr><th>case</th><th>quantity</th><th>PD</th><th>reference</th><th>which</th>"
             "<th>error</th><th>gate</th><th>wall (s)</th><th>result</th></tr>")
     note = ('<p class="note">error = (PD − reference) / reference, + = PD larger; ± where the case '

@@ -123,12 +123,13 @@ def structure_row(page: Page, case: str, d: dict, quantity: str) -> list[str]:
         efe_l.append(signed(v, r.get("fe")))
     for k, v in err.items():
         if k.startswith("line_"):
-            efe_l.append(f"<small>{esc(k.removeprefix('line_').replace('_max_over_max_fe', ''))} line max: |{pct(v)}|</small>")
+            efe_l.append(f'<small class="wrap">{esc(k.removeprefix("line_").replace("_max_over_max_fe", ""))} '
+                         f"line max: |{pct(v)}|</small>")
     budget = d.get("error_budget", {})
     first = next((b for b in budget.values() if isinstance(b, dict)), None)
     if first:
         sec = d.get("section_stiffness", {})
-        efe_l.append(f"<small>budget: section ×{fnum(first.get('section_factor'), 4)} "
+        efe_l.append(f"<small class=\"wrap\">budget: section ×{fnum(first.get('section_factor'), 4)} "
                      f"(bending {fnum(sec.get('bending'), 3)}, shear {fnum(sec.get('shear'), 3)}), "
                      f"supports/load/ends ×{fnum(first.get('remaining_factor'), 4)}</small>")
     paper = pct(page.cases[case.removesuffix("-fast")].paper_agreement)
@@ -148,7 +149,10 @@ def treatment(page: Page) -> str:
                           f"{s.get('mirror_coupling', '?')} clamps")
     if not used:
         return ""
-    return ('<p class="reading">Structural cases ran with: ' +
-            "; ".join(f"{esc(c)} {esc(t)}" for c, t in used.items()) +
+    by: dict[str, list[str]] = {}
+    for c, t in used.items():
+        by.setdefault(t, []).append(c)
+    return ('<p class="reading">Structural cases ran with ' +
+            "; ".join(f"{esc(t)} ({esc(', '.join(cs))})" for t, cs in by.items()) +
             " (surface + volume correction, mirror coupling): the errors below are those of "
-            "this treatment; the old pairs are sweep rows further down.</p>")
+            'this treatment; the old pairs are sweep rows <a href="#old-pairs">further down</a>.</p>')
