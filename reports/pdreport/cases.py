@@ -43,11 +43,7 @@ class Case:
     gate: dict[str, float]
     has_sweep: bool
     path: Path
-
-    @property
-    def paper_level(self) -> float | None:
-        """Miranda's own PD–FE agreement: the case files gate on it (vs FE), so it is the gate."""
-        return max(self.gate.values()) if self.gate else None
+    paper_agreement: float | None = None    # Miranda's own PD–FE agreement (the gates are issue 14's)
 
     def line(self, name: str) -> Line | None:
         return next((l for l in self.lines if l.name == name), None)
@@ -62,7 +58,8 @@ def _case(d: dict, path: Path) -> Case:
                          tuple(map(float, l["through"])), l.get("paper_figure"))
                     for l in d.get("lines") or []),
         gate={k: float(v) for k, v in (d.get("gate") or {}).items()},
-        has_sweep=bool(d.get("sweep")), path=path)
+        has_sweep=bool(d.get("sweep")), path=path,
+        paper_agreement=float(d["paper_agreement"]) if "paper_agreement" in d else None)
 
 
 def load(cases_dir: Path = CASES_DIR) -> dict[str, Case]:

@@ -21,6 +21,17 @@ img{max-width:100%;border:1px solid #dde} .figs{display:flex;flex-wrap:wrap;gap:
 .figs figure{margin:0;flex:1 1 560px} figcaption{font-size:12px;color:#444}
 code{background:#f2f2f6;padding:0 3px;border-radius:3px;font-size:12px}
 nav a{margin-right:12px} .tw{overflow-x:auto;max-width:100%}
+#scorecard-table{width:100%;font-size:13px} #scorecard-table td{overflow-wrap:anywhere}
+#scorecard-table td.num{overflow-wrap:normal} #scorecard-table td.case{white-space:nowrap}
+#scorecard-table td.kind{color:#555;font-size:12px} #scorecard-table td.gate-text{font-size:12px;
+ color:#444;max-width:260px} #scorecard-table td.gate{white-space:nowrap}
+td.over{color:#b3141a;font-weight:600} #summary-table{font-size:12px} td .wrap{white-space:normal;display:inline-block}
+td.verdict{font-weight:700;text-align:center;white-space:nowrap}
+.v-pass{background:#e2f4e5;color:#0a7a28} .v-fail{background:#fde2e2;color:#b3141a}
+.v-info{background:#f1f1f4;color:#555}
+.cases{display:flex;flex-wrap:wrap;gap:6px 18px} .case{flex:1 1 380px;min-width:0}
+table.kv{font-size:12px;width:100%;table-layout:fixed} table.kv td{overflow-wrap:anywhere}
+table.kv td:first-child{width:55%} details{margin:4px 0 10px}
 """
 
 CHECK_SCRIPT = """
@@ -38,6 +49,16 @@ function pdCheckImages(){
   b.setAttribute('data-images-broken', broken.join(' '));
   b.setAttribute('data-summary-rows',
     String(document.querySelectorAll('#summary-table tbody tr[data-case]').length));
+  b.setAttribute('data-scorecard-rows',
+    String(document.querySelectorAll('#scorecard-table tbody tr[data-case]').length));
+  // Sideways scrolling: the page's own width against the window's, and the scorecard's against
+  // the space it has (a table may overflow its box without widening the document).
+  var sc=document.getElementById('scorecard-table');
+  b.setAttribute('data-viewport-width', String(window.innerWidth));
+  b.setAttribute('data-client-width', String(document.documentElement.clientWidth));
+  b.setAttribute('data-document-width', String(document.documentElement.scrollWidth));
+  b.setAttribute('data-scorecard-width', sc ? String(Math.ceil(sc.getBoundingClientRect().width)) : '-1');
+  b.setAttribute('data-scorecard-room', sc ? String(sc.parentElement.clientWidth) : '-1');
   b.setAttribute('data-check', broken.length===0 ? 'images-ok' : 'images-broken');
 }
 window.addEventListener('load', pdCheckImages);

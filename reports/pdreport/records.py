@@ -52,6 +52,25 @@ def sweep_error(r: dict) -> float | None:
     return None
 
 
+def corrections_of(r: dict) -> str:
+    """A run's surface + volume correction pair, written as the case files' `corrections:` knob
+    writes it ("ghost+gradient")."""
+    return f"{r.get('surface_correction', '?')}+{r.get('volume_correction', '?')}"
+
+
+def signed_sweep_errors(r: dict, fe: dict[str, float]) -> dict[str, float]:
+    """(PD − FE)/FE per quantity of a sweep row: the row's own `signed_error_vs_fe`, else from its
+    PD values and the FE values `fe` (rows written before the sign was recorded)."""
+    own = r.get("signed_error_vs_fe")
+    if isinstance(own, dict):
+        return {q: float(v) for q, v in own.items() if is_number(v)}
+    out = {}
+    for q, v in (r.get("pd") or {}).items():
+        if is_number(v) and is_number(fe.get(q)) and fe[q] != 0:
+            out[q] = float(v) / fe[q] - 1.0
+    return out
+
+
 def sweep_points(rows: list[dict]) -> list[tuple]:
     """(wall seconds, error vs FE, knob, knob value, row) of each usable sweep row."""
     pts = []

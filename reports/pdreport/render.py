@@ -11,20 +11,23 @@ import os
 from pathlib import Path
 
 from . import cases as case_files
-from . import integrators, performance, structures, summary
+from . import casedetails, integrators, performance, scorecard, structures, summary
 from .fmt import esc
 from .markup import CHECK_SCRIPT, CSS, num_td, table
 from .metrics import metrics
 from .page import Page
 
-SECTIONS = (("summary", "Summary"), ("deflections", "Deflections"), ("accuracy", "Accuracy vs time"),
-            ("integrators", "Integrators"), ("performance", "Performance"), ("stages", "Stages"))
+SECTIONS = (("scorecard", "Scorecard"), ("environment", "Environment"), ("summary", "Summary"),
+            ("convergence", "Convergence"), ("deflections", "Deflections"),
+            ("accuracy", "Accuracy vs time"), ("integrators", "Integrators"),
+            ("performance", "Performance"), ("cases", "Cases"), ("stages", "Stages"))
 
 
 def page_html(page: Page) -> str:
-    parts = [header(page), summary.section(page), structures.deflections(page),
+    # The scorecard comes first: it is the page's answer, everything below is its evidence.
+    parts = [scorecard.section(page), header(page), summary.section(page), structures.deflections(page),
              structures.accuracy_vs_time(page), integrators.section(page), performance.section(page),
-             stage_table(page)]
+             casedetails.section(page), stage_table(page)]
     body = "\n".join(parts)
     nav = " ".join(f'<a href="#{i}">{t}</a>' for i, t in SECTIONS)
     return (f"<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"

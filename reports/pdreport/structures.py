@@ -136,7 +136,8 @@ def sweep_block(page: Page, case: str, rows: list[dict], result: dict | None = N
             sel = sel + [base]
         sel.sort(key=lambda p: p[0])
         line, = ax.loglog([p[0] for p in sel], [max(p[1], 1e-12) for p in sel],
-                          markers[i % len(markers)], ls="-", lw=0.7, ms=6, alpha=0.85, label=k)
+                          markers[i % len(markers)], ls="-", lw=0.7, ms=6, alpha=0.85,
+                          label=KNOB_LABEL.get(k, k))
         for p in sel:
             if p is base:
                 continue
@@ -155,17 +156,16 @@ def sweep_block(page: Page, case: str, rows: list[dict], result: dict | None = N
     ax.set_title(f"{case}: error vs wall time", fontsize=10)
     img = page.savefig(fig, f"accuracy-{case}.png")
     readings = sweep_readings(pts)
-    extra = ""
-    if result and result.get("observed_order_in_spacing") is not None:
-        extra = (f'<p class="note">Observed order in λ (least squares of log error vs log λ over the '
-                 f'spacing runs): {fnum(result["observed_order_in_spacing"], 3)}.</p>')
+    extra = (f'<p class="note">Error against λ with its observed order: <a href="#convergence-{esc(case)}">'
+             f'Summary, convergence in λ</a>; the <code>corrections</code> rows are the old correction '
+             f'pairs (<a href="#old-pairs-{esc(case)}">beside the default</a>).</p>')
     if result and result.get("reduced"):
         swept = ", ".join(c for c in in_listed_order(page.cases, R.listed_cases(page.rec, page.meta))
                           if page.cases[c].has_sweep)
         extra += ('<p class="note">Default report: a <b>reduced sweep</b> (the first value of each '
                   "knob list of the case file, besides the baseline); <code>--full</code> runs the "
                   f"complete sweeps of {esc(swept)}.</p>")
-    trows = [[esc(p[2]), esc(short(p[3])), num_td(pct(p[1])), num_td(fnum(p[0], 3)),
+    trows = [[esc(KNOB_LABEL.get(p[2], p[2])), esc(short(p[3])), num_td(pct(p[1])), num_td(fnum(p[0], 3)),
               num_td(fnum(p[4].get("spacing"))), num_td(fnum(p[4].get("horizon_factor"), 3)),
               esc(p[4].get("stretch", "")), esc(f"{p[4].get('surface_correction', '')}/{p[4].get('volume_correction', '')}"),
               num_td(fnum(p[4].get("force_tolerance"))),
@@ -189,6 +189,9 @@ def _as_float(v: object) -> float | None:
         return None
 
 
+# The sweep's `corrections` knob runs the pairs the scenes used before ghost + gradient.
+KNOB_LABEL = {"corrections": "old correction pair"}
+
 KNOB_FIELD = {"spacing": "spacing", "horizon_factor": "horizon_factor", "stretch": "stretch",
               "surface_correction": "surface_correction", "volume_correction": "volume_correction",
               "force_tolerance": "force_tolerance"}
@@ -206,7 +209,8 @@ def sweep_readings(pts: list[tuple]) -> list[str]:
     for knob, sel in sorted(by.items()):
         series = list(sel)
         if base is not None:
-            bv = base[4].get(KNOB_FIELD.get(knob, knob), "baseline")
+            bv = (R.corrections_of(base[4]) if knob == "corrections"
+                  else base[4].get(KNOB_FIELD.get(knob, knob), "baseline"))
             series.append((base[0], base[1], knob, bv, base[4]))
         if len(series) < 2:
             continue
@@ -247,7 +251,8 @@ def sweep_readings(pts: list[tuple]) -> list[str]:
             for p in sel:
                 gain = p[1] / ref[1] if ref[1] > 0 else math.inf
                 cost = p[0] / ref[0] if ref[0] > 0 else math.inf
-                out.append(f"{knob} {short(p[3])} instead of {short(ref[3])}: error {pct(ref[1])} → "
+                out.append(f"{KNOB_LABEL.get(knob, knob)} {short(p[3])} instead of {short(ref[3])}: "
+                           f"error {pct(ref[1])} → "
                            f"{pct(p[1])}, time ×{cost:.2g}.")
     best = min(pts, key=lambda p: p[1])
     out.append(f"Most accurate run: {best[2]} = {short(best[3])}, error {pct(best[1])} in {best[0]:.1f} s.")

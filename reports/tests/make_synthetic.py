@@ -6,7 +6,8 @@
 The numbers are made up (smooth functions with the right shapes and units) and the page says so in
 its "mode" line; they exist only so the renderer, the browser check and --compare can be tested
 without the heavy stages.  One stage (lammps) is a failed stage on purpose, so the failed-stage box
-is exercised too.  Prints the number of verification cases (= expected summary-table rows).
+is exercised too.  The meta lists the cases as `pd verify --list` would (with one slow case the
+default report skips and the sweeps); prints how many (= expected scorecard and summary rows).
 """
 from __future__ import annotations
 
@@ -54,6 +55,114 @@ def structure(case: str, quantities: dict[str, tuple[float, float]], lines: dict
             "passed": passed, "wall_seconds": 12.5, "particles": 4032, "bonds": 231908,
             "steps": 4600, "bond_updates": 1.07e9,
             "settings": {"spacing": 0.05, "horizon_factor": 3.464, "stretch": "exact"}}
+
+
+def srow(case: str, knob: str, value: str, errors: dict[str, float], wall: float, **kw: object) -> dict:
+    """One row of `pd verify CASE-sweep`: signed errors vs FE per quantity (FE taken as 1.4e-4)."""
+    r = {"case": case, "knob": knob, "knob_value": value, "spacing": 0.05, "horizon_factor": 3.4641,
+         "stretch": "exact", "surface_correction": "ghost", "volume_correction": "gradient",
+         "force_tolerance": 1e-6, "status": "converged",
+         "pd": {q: 1.4e-4 * (1 + e) for q, e in errors.items()},
+         "error_vs_fe": {q: abs(e) for q, e in errors.items()}, "signed_error_vs_fe": dict(errors),
+         "wall_seconds": wall, "steps": 4600, "bond_updates": 1e9, "particles": 4032, "bonds": 231908,
+         "section_stiffness": {"bending": 0.98, "shear": 1.0}}
+    r.update(kw)
+    return r
+
+
+def more_cases(verify: list[tuple[str, dict]]) -> list[tuple[str, dict]]:
+    """A case gated in words with signed errors (block-tension) and a CI variant with its
+    regression against the stored value (clamped-beam-fast)."""
+    block = {"case": "block-tension", "quantity": "centre-line u_x at the loaded end and lateral strain",
+             "pd": {"end_displacement": 1.0039e-3, "mid_displacement": 4.9e-4, "lateral_strain": -2.5215e-3},
+             "reference": {"end_displacement": 1.0e-3, "mid_displacement": 4.875e-4, "lateral_strain": -2.5e-3},
+             "error": {"elongation": 0.0039, "mid_displacement": 0.0051, "lateral_contraction": 0.0086},
+             "signed_error": {"elongation": 0.0039, "lateral_contraction": 0.0086},
+             "gate": "elongation error <= 0.5 %, lateral contraction error <= 2 %, steady state reached",
+             "passed": True, "wall_seconds": 41.0, "particles": 8000, "bonds": 90000}
+    fast = json.loads(json.dumps(dict(verify)["clamped-beam"]))
+    fast.update(case="clamped-beam-fast", wall_seconds=5.3,
+                regression={"midspan": {"stored": 1.43e-4, "relative_change": 2e-6, "tolerance": 1e-4}})
+    return [("block-tension", block), ("clamped-beam-fast", fast)]
+
+
+OLD_PAIRS = (("energy", "linear"), ("macek-silling", "linear"), ("tensor", "moment"))
+
+
+def sweeps() -> list[dict]:
+    """The clamped beam's complete sweep, the cantilever's spacing and old pairs only (the plate
+    has none: the page says so)."""
+    def cb(knob: str, value: str, err: float, wall: float, **kw: object) -> dict:
+        return srow("clamped-beam", knob, value, {"midspan": err}, wall, **kw)
+    rows = [cb("baseline", "scene", 0.02, 20.0)]
+    for lam, e, w in ((0.1, 0.05, 3.0), (0.0333333, 0.009, 150.0)):
+        rows.append(cb("spacing", f"{lam:.6g}", e, w, spacing=lam))
+    for m, e, w in ((3.0, 0.025, 14.0), (4.0, 0.017, 31.0)):
+        rows.append(cb("horizon_factor", f"{m:.6g}", e, w, horizon_factor=m))
+    for st, e, w in (("modified", 0.0201, 19.0), ("fast", 0.0203, 17.0)):
+        rows.append(cb("stretch", st, e, w, stretch=st))
+    rows.append(cb("surface_correction", "none", 0.06, 19.5, surface_correction="none"))
+    for t, e, w in ((1e-4, 0.03, 9.0), (1e-7, 0.02, 30.0)):
+        rows.append(cb("force_tolerance", f"{t:.3g}", e, w, force_tolerance=t))
+    # A finest level whose error stopped falling (it met the FE's own accuracy): outside the fit.
+    rows.append(cb("spacing", "0.025", -0.0095, 400.0, spacing=0.025))
+    for (sc, vc), e in zip(OLD_PAIRS, (0.026, -0.157, 0.134)):
+        rows.append(cb("corrections", f"{sc}+{vc}", e, 18.0, surface_correction=sc, volume_correction=vc))
+    cant = [srow("cantilever", "baseline", "scene", {"tip": 0.0011}, 4.0)]
+    for lam, e, w in ((0.1, 0.004, 0.5), (0.0333333, 0.0004, 20.0)):
+        cant.append(srow("cantilever", "spacing", f"{lam:.6g}", {"tip": e}, w, spacing=lam))
+    for (sc, vc), e in zip(OLD_PAIRS, (-0.011, -0.12, 0.10)):
+        cant.append(srow("cantilever", "corrections", f"{sc}+{vc}", {"tip": e}, 3.0,
+                         surface_correction=sc, volume_correction=vc))
+    return [rec("sweep:clamped-beam", "sweep", {"case": "clamped-beam", "rows": rows, "reduced": False,
+                                                "observed_order_in_spacing": 1.5}, seconds=60),
+            rec("sweep:cantilever", "sweep", {"case": "cantilever", "rows": cant, "reduced": False}, seconds=30)]
+
+
+def tool_records() -> list[dict]:
+    """Integrators, benchmarks and the LAMMPS stage (failed on purpose)."""
+    out: list[dict] = []
+    out.append(rec("stability", "stability", {"rows": [
+        {"case": "bar-vibration", "integrator": integ, "interval": beta, "measured_dt": 3.3e-7 * beta / 2 * 1.05,
+         "eq31_dt": 3.27e-7, "sharp_dt": 3.3e-7 * beta / 2, "measured_over_sharp": 1.05,
+         "measured_over_eq31": 1.05 * beta / 2, "sharp_finite_horizon_dt": 3.4e-7 * beta / 2,
+         "measured_over_sharp_finite_horizon": 1.01, "runs": 12, "wall_seconds": 0.4}
+        for integ, beta in (("verlet", 2.0), ("arkode:rk4", 2.828), ("arkode:dormand-prince", 3.0))]}))
+    dyn = []
+    for integ, table, order in (("verlet", "-", 2), ("arkode", "rk4", 4)):
+        for f in (0.9, 0.45, 0.225):
+            ev = int(2000 / f * (4 if table == "rk4" else 1))
+            dyn.append({"case": "bar-vibration", "integrator": integ, "table": table, "dt": 3e-7 * f,
+                        "dt_over_eq31": f, "error": 0.012 + 0.05 * f**order, "error_vs_reference_pd": 0.05 * f**order,
+                        "error_measure": "free-end history RMS / (eps L)", "force_evaluations": ev,
+                        "wall_seconds": ev * 1e-4, "steps": int(2000 / f), "status": "completed"})
+    out.append(rec("compare:dynamic", "compare", {"which": "dynamic", "rows": dyn}))
+    qs = [{"case": "clamped-beam", "integrator": i, "table": t, "adaptive": a, "dt": dt, "midspan_deflection": w,
+           "error": abs(w - 2.1778e-4) / 2.1778e-4, "force_tolerance": 1e-6, "residual": 6e-7,
+           "force_evaluations": fe, "wall_seconds": fe * 4.6e-3, "steps": fe, "internal_steps": fe,
+           "status": "converged"}
+          for i, t, a, dt, w, fe in (("damped-euler", "-", False, 1.5e-4, 2.1778e-4, 4600),
+                                     ("adr", "-", False, 1.0, 2.1779e-4, 900),
+                                     ("arkode", "dormand-prince", True, 0, 2.1770e-4, 3100))]
+    out.append(rec("compare:quasistatic", "compare", {"which": "quasistatic", "rows": qs}))
+    runs = []
+    for s, r1 in (("exact", 5.0e7), ("modified", 5.6e7), ("fast", 6.4e7)):
+        for t in (1, 2):
+            rate = r1 * (1.8 if t == 2 else 1)
+            runs.append({"scene": "model-a", "kernel": f"stretch={s}", "threads": t, "threads_requested": t,
+                         "stretch": s, "particles": 5229, "bonds": 319533, "steps": 100, "repeats": 5,
+                         "seconds": 319533 * 100 / rate, "bond_updates_per_second": rate})
+    out.append(rec("bench", "bench", {"scene": "verification/scenes/model-a-benchmark.yaml", "runs": runs,
+                                      "loadavg": "['0.5', '0.5', '0.5']"}))
+    benches = [{"name": f"{n}/real_time", "run_type": "iteration", "real_time": ms, "time_unit": "ms",
+                "bond_updates_per_second": 319533 / (ms * 1e-3)}
+               for n, ms in (("HandWrittenElastic", 6.0), ("Dispatched/elastic_exact", 6.1),
+                             ("Dispatched/elastic_fast", 5.0), ("Dispatched/damage_exact", 7.2))]
+    out.append(rec("kernel", "kernel", {"context": {"num_cpus": 2}, "benchmarks": benches}))
+    out.append(rec("lammps", "lammps", None, status="failed", seconds=0.1,
+                   error="synthetic: reports/lammps/run_lammps_bench.sh exited with code 127 "
+                         "(LAMMPS binary 'lmp' not found) — the failed-stage box is part of the test"))
+    return out
 
 
 def main(out: Path) -> int:
@@ -120,70 +229,11 @@ def main(out: Path) -> int:
          "free_edge": {"columns": ["position", "pd", "fe"], "rows": erow, "max_difference_over_max_fe": 0.03}},
         {"free_edge_middle": {"kirchhoff": kq["free_edge_mid"]["kirchhoff"]},
          "centre": {"kirchhoff": kq["centre"]["kirchhoff"]}}, True)))
+    verify += more_cases(verify)
     for case, d in verify:
         records.append(rec(f"verify:{case}", "verify", d, seconds=d["wall_seconds"]))
-    rows = []
-
-    def srow(knob: str, value: str, err: float, wall: float, **kw: object) -> dict:
-        r = {"case": "clamped-beam", "knob": knob, "knob_value": value, "spacing": 0.05, "horizon_factor": 3.4641,
-             "stretch": "exact", "surface_correction": "energy", "volume_correction": "none",
-             "force_tolerance": 1e-6, "status": "converged", "pd": {"midspan": 1.4e-4 * (1 + err)},
-             "error_vs_fe": {"midspan": err}, "wall_seconds": wall, "steps": 4600, "bond_updates": 1e9,
-             "particles": 4032, "bonds": 231908}
-        r.update(kw)
-        return r
-    rows.append(srow("baseline", "scene", 0.02, 20.0))
-    for lam, e, w in ((0.1, 0.05, 3.0), (0.0333333, 0.009, 150.0)):
-        rows.append(srow("spacing", f"{lam:.6g}", e, w, spacing=lam))
-    for m, e, w in ((3.0, 0.025, 14.0), (4.0, 0.017, 31.0)):
-        rows.append(srow("horizon_factor", f"{m:.6g}", e, w, horizon_factor=m))
-    for st, e, w in (("modified", 0.0201, 19.0), ("fast", 0.0203, 17.0)):
-        rows.append(srow("stretch", st, e, w, stretch=st))
-    rows.append(srow("surface_correction", "none", 0.06, 19.5, surface_correction="none"))
-    for t, e, w in ((1e-4, 0.03, 9.0), (1e-7, 0.02, 30.0)):
-        rows.append(srow("force_tolerance", f"{t:.3g}", e, w, force_tolerance=t))
-    records.append(rec("sweep:clamped-beam", "sweep", {"case": "clamped-beam", "rows": rows, "reduced": False,
-                                                    "observed_order_in_spacing": 1.5}, seconds=60))
-    records.append(rec("stability", "stability", {"rows": [
-        {"case": "bar-vibration", "integrator": integ, "interval": beta, "measured_dt": 3.3e-7 * beta / 2 * 1.05,
-         "eq31_dt": 3.27e-7, "sharp_dt": 3.3e-7 * beta / 2, "measured_over_sharp": 1.05,
-         "measured_over_eq31": 1.05 * beta / 2, "sharp_finite_horizon_dt": 3.4e-7 * beta / 2,
-         "measured_over_sharp_finite_horizon": 1.01, "runs": 12, "wall_seconds": 0.4}
-        for integ, beta in (("verlet", 2.0), ("arkode:rk4", 2.828), ("arkode:dormand-prince", 3.0))]}))
-    dyn = []
-    for integ, table, order in (("verlet", "-", 2), ("arkode", "rk4", 4)):
-        for f in (0.9, 0.45, 0.225):
-            ev = int(2000 / f * (4 if table == "rk4" else 1))
-            dyn.append({"case": "bar-vibration", "integrator": integ, "table": table, "dt": 3e-7 * f,
-                        "dt_over_eq31": f, "error": 0.012 + 0.05 * f**order, "error_vs_reference_pd": 0.05 * f**order,
-                        "error_measure": "free-end history RMS / (eps L)", "force_evaluations": ev,
-                        "wall_seconds": ev * 1e-4, "steps": int(2000 / f), "status": "completed"})
-    records.append(rec("compare:dynamic", "compare", {"which": "dynamic", "rows": dyn}))
-    qs = [{"case": "clamped-beam", "integrator": i, "table": t, "adaptive": a, "dt": dt, "midspan_deflection": w,
-           "error": abs(w - 2.1778e-4) / 2.1778e-4, "force_tolerance": 1e-6, "residual": 6e-7,
-           "force_evaluations": fe, "wall_seconds": fe * 4.6e-3, "steps": fe, "internal_steps": fe,
-           "status": "converged"}
-          for i, t, a, dt, w, fe in (("damped-euler", "-", False, 1.5e-4, 2.1778e-4, 4600),
-                                     ("adr", "-", False, 1.0, 2.1779e-4, 900),
-                                     ("arkode", "dormand-prince", True, 0, 2.1770e-4, 3100))]
-    records.append(rec("compare:quasistatic", "compare", {"which": "quasistatic", "rows": qs}))
-    runs = []
-    for s, r1 in (("exact", 5.0e7), ("modified", 5.6e7), ("fast", 6.4e7)):
-        for t in (1, 2):
-            rate = r1 * (1.8 if t == 2 else 1)
-            runs.append({"scene": "model-a", "kernel": f"stretch={s}", "threads": t, "threads_requested": t,
-                         "stretch": s, "particles": 5229, "bonds": 319533, "steps": 100, "repeats": 5,
-                         "seconds": 319533 * 100 / rate, "bond_updates_per_second": rate})
-    records.append(rec("bench", "bench", {"scene": "verification/scenes/model-a-benchmark.yaml", "runs": runs,
-                                          "loadavg": "['0.5', '0.5', '0.5']"}))
-    benches = [{"name": f"{n}/real_time", "run_type": "iteration", "real_time": ms, "time_unit": "ms",
-                "bond_updates_per_second": 319533 / (ms * 1e-3)}
-               for n, ms in (("HandWrittenElastic", 6.0), ("Dispatched/elastic_exact", 6.1),
-                             ("Dispatched/elastic_fast", 5.0), ("Dispatched/damage_exact", 7.2))]
-    records.append(rec("kernel", "kernel", {"context": {"num_cpus": 2}, "benchmarks": benches}))
-    records.append(rec("lammps", "lammps", None, status="failed", seconds=0.1,
-                       error="synthetic: reports/lammps/run_lammps_bench.sh exited with code 127 "
-                             "(LAMMPS binary 'lmp' not found) — the failed-stage box is part of the test"))
+    records += sweeps()
+    records += tool_records()
     for r in records:
         name = r["name"].replace(":", "_")
         (data / f"{name}.json").write_text(json.dumps(r))
@@ -192,10 +242,16 @@ def main(out: Path) -> int:
         "libpd": "0.1.0", "git_commit": "synthetic", "deal.II": "synthetic", "SUNDIALS": "synthetic",
         "LAMMPS": "synthetic", "compiler": "synthetic", "cpu": "synthetic", "cores": 2, "threads": 2,
         "date": "synthetic", "build_dir": "-", "python": sys.version.split()[0], "matplotlib": "?"}))
+    # As `pd verify --list` lists them: the cases run, one the default report leaves out as slow,
+    # and the sweeps (two run, one not).
+    listed = [[c, f"synthetic {c}"] for c, _ in verify]
+    listed.insert([c for c, _ in listed].index("block-tension") + 1,
+                  ["block-tension-corrections", "synthetic (slow)"])
+    listed += [[f"{c}-sweep", "synthetic sweep"] for c in ("clamped-beam", "cantilever", "plate-3clamped")]
     (data / "_meta.json").write_text(json.dumps({
         "mode": "SYNTHETIC TEST DATA (reports/tests/make_synthetic.py) — not a real run",
-        "total_seconds": sum(r["seconds"] for r in records)}))
-    print(len(verify))
+        "total_seconds": sum(r["seconds"] for r in records), "cases": listed}))
+    print(len(listed))
     return 0
 
 

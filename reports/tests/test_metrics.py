@@ -11,7 +11,9 @@ branches (pd verify --list in the meta with slow, failed, stale, cached, -fast a
 failed sweep, unusable and non-finite values, kernel aggregates, a LAMMPS run).  For each:
   * metrics(records) equals tests/fixtures/metrics-NAME.json, names, order, kinds and values; the
     fixtures were written by the renderer of commit 3785b6a, which still recorded metrics as it
-    rendered, so this pins the move;
+    rendered, so this pins the move; when the synthetic data grew (block-tension,
+    clamped-beam-fast, the cantilever sweep, the old correction pairs) they were rewritten with
+    --write and only gained metrics: every earlier one kept its value;
   * render() writes exactly those metrics into report.json.
 """
 from __future__ import annotations

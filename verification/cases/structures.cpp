@@ -51,6 +51,12 @@ struct LineQuantity {
   Vec3 through{};
 };
 
+struct CorrectionPair {
+  std::string label; ///< as the case file writes it: "surface+volume", e.g. "energy+linear"
+  SurfaceCorrection surface = SurfaceCorrection::none;
+  VolumeCorrection volume = VolumeCorrection::none;
+};
+
 struct StructureCase {
   std::string name;
   std::string scene;
@@ -68,6 +74,9 @@ struct StructureCase {
   std::vector<double> sweep_horizon_factor;
   std::vector<std::string> sweep_stretch;
   std::vector<double> sweep_force_tolerance;
+  /// Surface + volume correction pairs the structural scenes ran with before the library's
+  /// defaults (ghost + gradient), so the sweep shows what the defaults bought.
+  std::vector<CorrectionPair> sweep_corrections;
   /// Section-stiffness error budget (section_stiffness.hpp): axes of the main body.
   int section_span = 0;
   int section_depth = 2;
@@ -90,6 +99,22 @@ std::map<std::string, double> read_map(const YAML::Node& n) {
     }
   }
   return m;
+}
+
+/// "surface+volume" of a case file's sweep, checked against the scene format's words before any
+/// run starts.
+CorrectionPair correction_pair(const std::string& text, const std::filesystem::path& file) {
+  const auto plus = text.find('+');
+  const auto surface = from_name<SurfaceCorrection>(text.substr(0, plus));
+  const auto volume =
+      plus == std::string::npos ? std::nullopt : from_name<VolumeCorrection>(text.substr(plus + 1));
+  if (!surface || !volume) {
+    throw std::runtime_error(fmt::format(
+        "{}: sweep corrections '{}': expected SURFACE+VOLUME, SURFACE one of {}, VOLUME one of {}",
+        file.string(), text, fmt::join(enum_words<SurfaceCorrection>, ", "),
+        fmt::join(enum_words<VolumeCorrection>, ", ")));
+  }
+  return {text, *surface, *volume};
 }
 
 StructureCase load_case(const std::filesystem::path& file) {
@@ -132,6 +157,10 @@ StructureCase load_case(const std::filesystem::path& file) {
       c.sweep_stretch = sw["stretch"].as<std::vector<std::string>>(std::vector<std::string>{});
       c.sweep_force_tolerance =
           sw["force_tolerance"].as<std::vector<double>>(std::vector<double>{});
+      for (const auto& pair :
+           sw["corrections"].as<std::vector<std::string>>(std::vector<std::string>{})) {
+        c.sweep_corrections.push_back(correction_pair(pair, file));
+      }
     }
   } catch (const YAML::Exception& e) {
     throw std::runtime_error(fmt::format("{}:{}:{}: bad case description: {}", file.string(),
@@ -464,6 +493,9 @@ Json run_structure(const Context& ctx, const std::string& case_name, bool fast) 
   settings["spacing"] = scene.model.lattice.spacing;
   settings["horizon_factor"] = scene.model.lattice.horizon_factor;
   settings["stretch"] = to_string(scene.model.effects.stretch);
+  settings["surface_correction"] = to_string(scene.model.surface_correction);
+  settings["volume_correction"] = to_string(scene.model.volume_correction);
+  settings["mirror_coupling"] = std::string(name_of(scene.model.mirror_coupling));
   settings["integrator"] = to_string(scene.solver.integrator);
   settings["force_tolerance"] = scene.solver.steady.force_tolerance;
   settings["kinetic_tolerance"] = scene.solver.steady.kinetic_tolerance;
@@ -542,19 +574,15 @@ double observed_order(const std::vector<std::pair<double, double>>& spacing_erro
   return (n * sxy - sx * sy) / (n * sxx - sx * sx);
 }
 
-/// One row per run: each knob varied on its own around the scene's settings (the baseline).
-Json run_structure_sweep(const Context& ctx, const std::string& case_name) {
-  const StructureCase c =
-      load_case(ctx.scenes_dir.parent_path() / "cases" / (case_name + ".case.yaml"));
-  const Scene base = load_scene((ctx.scenes_dir / c.scene).string());
-  const YAML::Node fe = load_fe_summary(c.fe_reference);
+struct SweepVariant {
+  std::string knob;
+  std::string value;
+  Scene scene;
+};
 
-  struct Variant {
-    std::string knob;
-    std::string value;
-    Scene scene;
-  };
-  std::vector<Variant> variants{{"baseline", "scene", base}};
+/// The sweep's runs: the scene itself (the baseline), then each knob varied on its own.
+std::vector<SweepVariant> sweep_variants(const Scene& base, const StructureCase& c) {
+  std::vector<SweepVariant> variants{{"baseline", "scene", base}};
   for (double h : c.sweep_spacing) {
     Scene s = base;
     set_spacing(s, h);
@@ -588,6 +616,24 @@ Json run_structure_sweep(const Context& ctx, const std::string& case_name) {
                                         (t / base.solver.steady.force_tolerance);
     variants.push_back({"force_tolerance", fmt::format("{:.3g}", t), s});
   }
+  // The old pairs run with everything else as the scene has it (clamps, solver), so the rows
+  // differ from the baseline in the corrections alone.
+  for (const CorrectionPair& pair : c.sweep_corrections) {
+    Scene s = base;
+    s.model.surface_correction = pair.surface;
+    s.model.volume_correction = pair.volume;
+    variants.push_back({"corrections", pair.label, s});
+  }
+  return variants;
+}
+
+/// One row per run: each knob varied on its own around the scene's settings (the baseline).
+Json run_structure_sweep(const Context& ctx, const std::string& case_name) {
+  const StructureCase c =
+      load_case(ctx.scenes_dir.parent_path() / "cases" / (case_name + ".case.yaml"));
+  const Scene base = load_scene((ctx.scenes_dir / c.scene).string());
+  const YAML::Node fe = load_fe_summary(c.fe_reference);
+  const std::vector<SweepVariant> variants = sweep_variants(base, c);
 
   std::string rows_text;
   Json rows = Json::array();
@@ -596,7 +642,7 @@ Json run_structure_sweep(const Context& ctx, const std::string& case_name) {
   const double first_fe =
       fe["quantities"][c.quantities.front().fe_key]["extrapolated"].as<double>();
   std::size_t k = 0;
-  for (const Variant& v : variants) {
+  for (const SweepVariant& v : variants) {
     ++k;
     fmt::print("   [{}/{}] {} = {} ...\n", k, variants.size(), v.knob, v.value);
     std::fflush(stdout);
@@ -618,6 +664,8 @@ Json run_structure_sweep(const Context& ctx, const std::string& case_name) {
       const double fe_value = fe["quantities"][q.fe_key]["extrapolated"].as<double>();
       row["pd"][q.name] = values[q.name];
       row["error_vs_fe"][q.name] = relative_error(values[q.name], fe_value);
+      // + means too soft; a sign change between levels ends a convergence fit.
+      row["signed_error_vs_fe"][q.name] = values[q.name] / fe_value - 1.0;
     }
     row["wall_seconds"] = run.result.wall_seconds;
     row["setup_seconds"] = run.setup_seconds;
