@@ -2,8 +2,12 @@
 // (nonsymmetric), with Eigen's own solvers when libpd is built without SuiteSparse.
 #include "sparse_factorisation.hpp"
 
+#include "libpd/core/memory.hpp"
+
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseLU>
+#include <fmt/format.h>
+#include <optional>
 #include <stdexcept>
 #include <string_view>
 
@@ -18,6 +22,19 @@ namespace {
 
 using SparseMatrix = Eigen::SparseMatrix<double>;
 
+/// Throws when a factor of `bytes` would not fit into the memory the run may use (with room for
+/// the matrix and the solver's workspace: 80 %).
+void check_fits(double bytes) {
+  const std::optional<MemoryBudget> budget = available_memory();
+  if (budget && bytes > 0.8 * budget->bytes) {
+    throw std::runtime_error(fmt::format(
+        "static solve: the Cholesky factor would take {} but {} are available ({}): use "
+        "'integrator: adr' (memory proportional to the bonds), a coarser spacing, or raise "
+        "PD_MEMORY_LIMIT if the machine has more",
+        format_bytes(bytes), format_bytes(budget->bytes), budget->source));
+  }
+}
+
 [[noreturn]] void singular(std::string_view what) {
   throw std::runtime_error(std::string("static solve: ") + std::string(what) +
                            " failed: the stiffness matrix is singular (is the body held against "
@@ -31,7 +48,13 @@ using SparseMatrix = Eigen::SparseMatrix<double>;
 class Cholmod final : public SparseFactorisation {
 public:
   explicit Cholmod(const SparseMatrix& K) {
-    llt_.compute(K);
+    // The symbolic analysis knows the factor's size: refuse a factor the machine cannot hold
+    // before the numeric factorisation runs into the OOM killer.
+    llt_.analyzePattern(K);
+    if (llt_.info() == Eigen::Success) {
+      check_fits(static_cast<double>(llt_.factor_bytes()));
+    }
+    llt_.factorize(K);
     if (llt_.info() != Eigen::Success) {
       singular("the Cholesky factorisation (CHOLMOD)");
     }
