@@ -9,14 +9,19 @@
 //                   --check fem_reference/reference/cantilever.json   (one line)
 //               build/bin/pd-fem --print-parameters     (all entries, documented)
 //
-// Description:  3D small-strain linear elasticity of a rectangular block
+// Description:  small-strain linear elasticity of a rectangular block
 //               Ω = [0,Lx] x [0,Ly] x [0,Lz] of an isotropic material (E, ν),
 //
 //                   -div σ(u) = 0                 in Ω,
 //                   σ(u) = λ tr ε(u) I + 2 μ ε(u),   ε(u) = (∇u + ∇u^T)/2,
 //                   u = 0                         on the clamped faces,
 //                   σ n = (0, 0, -q)              on the top face z = Lz,
-//                   σ n = 0                       on all other faces.
+//                   σ n = 0                       on all other faces,
+//
+//               or (Geometry/Dimension = 2) of the rectangle [0,Lx] x [0,Hy]
+//               of out-of-plane thickness t, loaded by σ n = (0, -q) on the
+//               top edge y = Hy: plane strain (ε_zz = 0, the same λ, μ) or
+//               plane stress (σ_zz = 0, λ* = 2λμ/(λ+2μ) for λ).
 //
 //               It provides the converged continuum reference for the
 //               peridynamics verification cases (Miranda et al. 2019,
@@ -31,6 +36,10 @@
 //                                  y=0 clamped, y=3 free, q = 10 kN/m^2;
 //                                  free-edge midpoint and centre deflection.
 //
+//               and their 2D counterparts (L x h = 3.5 x 0.4 m, t = 0.3 m):
+//               cantilever-2d.prm  plane stress, ν = 1/3; tip deflection.
+//               clamped-beam-2d.prm plane strain, ν = 0.25; midspan.
+//
 //                        z (gravity -z)      q  q  q  q  q  q  q
 //                        |  y                |  |  |  |  |  |  |
 //                        | /              +--v--v--v--v--v--v--v--+
@@ -41,10 +50,10 @@
 //                                  x = 0  +---------------------+
 //                                                  Lx
 //
-//               Q_p elements (FESystem(FE_Q(p), 3), p = 2 by default) on a
+//               Q_p elements (FESystem(FE_Q(p), dim), p = 2 by default) on a
 //               sequence of uniformly refined box meshes; CG preconditioned
 //               with Trilinos ML AMG using the rigid-body modes. For every
-//               level the deflection (-u_z, positive downward) at the
+//               level the deflection (-u_z, 2D: -u_y, positive downward) at the
 //               requested points is reported, and Richardson extrapolation
 //               of the last three levels estimates the discretisation error.
 //               The summary compares with Euler-Bernoulli / Timoshenko beam
@@ -79,7 +88,8 @@ const char* const usage_text =
     "usage: pd-fem PRMFILE [-o DIR] [--levels N] [--coarse] [--check REFERENCE.json]\n"
     "       pd-fem --print-parameters | --kirchhoff-selftest | --help\n"
     "\n"
-    "Solves 3D linear elasticity with deal.II on a sequence of refined meshes\n"
+    "Solves linear elasticity (3D, or 2D plane stress / plane strain) with deal.II\n"
+    "on a sequence of refined meshes\n"
     "and writes summary.json, deflection lines (CSV) and solution.vtu.\n"
     "\n"
     "  PRMFILE            deal.II parameter file (see fem_reference/prm/)\n"
@@ -237,8 +247,8 @@ int main(int argc, char** argv) {
     prm.print_parameters(prm_json, ParameterHandler::ShortJSON);
     prm.print_parameters(prm_text, ParameterHandler::ShortPRM);
 
-    pdfem::ElasticReference solver(parameters, n_levels, out_dir);
-    const pdfem::RunSummary summary = solver.run(command_line, prm_json.str(), prm_text.str());
+    const pdfem::RunSummary summary = pdfem::solve_reference(
+        parameters, n_levels, out_dir, command_line, prm_json.str(), prm_text.str());
 
     for (const auto& q : summary.quantities) {
       std::printf("%s: %-14s deflection %.8e m (finest), extrapolated "
