@@ -715,4 +715,22 @@ Json run_cantilever_sweep(const Context& ctx) {
 Json run_plate_sweep(const Context& ctx) {
   return run_structure_sweep(ctx, "plate-3clamped");
 }
+Json run_cantilever_2d(const Context& ctx) {
+  return run_structure(ctx, "cantilever-2d", false);
+}
+Json run_clamped_beam_2d(const Context& ctx) {
+  return run_structure(ctx, "clamped-beam-2d", false);
+}
+Json run_cantilever_2d_fast(const Context& ctx) {
+  return run_structure(ctx, "cantilever-2d", true);
+}
+Json run_clamped_beam_2d_fast(const Context& ctx) {
+  return run_structure(ctx, "clamped-beam-2d", true);
+}
+Json run_cantilever_2d_sweep(const Context& ctx) {
+  return run_structure_sweep(ctx, "cantilever-2d");
+}
+Json run_clamped_beam_2d_sweep(const Context& ctx) {
+  return run_structure_sweep(ctx, "clamped-beam-2d");
+}
 } // namespace pd::verification

@@ -20,6 +20,12 @@ Json run_plate_fast(const Context& ctx);
 Json run_clamped_beam_sweep(const Context& ctx);
 Json run_cantilever_sweep(const Context& ctx);
 Json run_plate_sweep(const Context& ctx);
+Json run_cantilever_2d(const Context& ctx);
+Json run_clamped_beam_2d(const Context& ctx);
+Json run_cantilever_2d_fast(const Context& ctx);
+Json run_clamped_beam_2d_fast(const Context& ctx);
+Json run_cantilever_2d_sweep(const Context& ctx);
+Json run_clamped_beam_2d_sweep(const Context& ctx);
 Json run_rc_beam(const Context& ctx);
 Json run_compression_cube(const Context& ctx);
 
