@@ -9,14 +9,19 @@
 //                   --check fem_reference/reference/cantilever.json   (one line)
 //               build/bin/pd-fem --print-parameters     (all entries, documented)
 //
-// Description:  3D small-strain linear elasticity of a rectangular block
+// Description:  small-strain linear elasticity of a rectangular block
 //               Ω = [0,Lx] x [0,Ly] x [0,Lz] of an isotropic material (E, ν),
 //
 //                   -div σ(u) = 0                 in Ω,
 //                   σ(u) = λ tr ε(u) I + 2 μ ε(u),   ε(u) = (∇u + ∇u^T)/2,
 //                   u = 0                         on the clamped faces,
 //                   σ n = (0, 0, -q)              on the top face z = Lz,
-//                   σ n = 0                       on all other faces.
+//                   σ n = 0                       on all other faces,
+//
+//               or (Geometry/Dimension = 2) of the rectangle [0,Lx] x [0,Hy]
+//               of out-of-plane thickness t, loaded by σ n = (0, -q) on the
+//               top edge y = Hy: plane strain (ε_zz = 0, the same λ, μ) or
+//               plane stress (σ_zz = 0, λ* = 2λμ/(λ+2μ) for λ).
 //
 //               It provides the converged continuum reference for the
 //               peridynamics verification cases (Miranda et al. 2019,
@@ -31,6 +36,10 @@
 //                                  y=0 clamped, y=3 free, q = 10 kN/m^2;
 //                                  free-edge midpoint and centre deflection.
 //
+//               and their 2D counterparts (L x h = 3.5 x 0.4 m, t = 0.3 m):
+//               cantilever-2d.prm  plane stress, ν = 1/3; tip deflection.
+//               clamped-beam-2d.prm plane strain, ν = 0.25; midspan.
+//
 //                        z (gravity -z)      q  q  q  q  q  q  q
 //                        |  y                |  |  |  |  |  |  |
 //                        | /              +--v--v--v--v--v--v--v--+
@@ -41,10 +50,10 @@
 //                                  x = 0  +---------------------+
 //                                                  Lx
 //
-//               Q_p elements (FESystem(FE_Q(p), 3), p = 2 by default) on a
+//               Q_p elements (FESystem(FE_Q(p), dim), p = 2 by default) on a
 //               sequence of uniformly refined box meshes; CG preconditioned
 //               with Trilinos ML AMG using the rigid-body modes. For every
-//               level the deflection (-u_z, positive downward) at the
+//               level the deflection (-u_z, 2D: -u_y, positive downward) at the
 //               requested points is reported, and Richardson extrapolation
 //               of the last three levels estimates the discretisation error.
 //               The summary compares with Euler-Bernoulli / Timoshenko beam
@@ -60,29 +69,27 @@
 // Threads: assembly uses all cores through deal.II's WorkStream; set
 // DEAL_II_NUM_THREADS to limit them. No MPI parallelism (one process).
 
-#include <deal.II/base/mpi.h>
-#include <deal.II/base/parameter_handler.h>
-#include <deal.II/base/utilities.h>
-
 #include "elastic_reference.h"
 #include "kirchhoff_plate.h"
 
 #include <boost/property_tree/json_parser.hpp>
 #include <boost/property_tree/ptree.hpp>
-
 #include <cmath>
 #include <cstdio>
+#include <deal.II/base/mpi.h>
+#include <deal.II/base/parameter_handler.h>
+#include <deal.II/base/utilities.h>
 #include <iostream>
 #include <sstream>
 #include <string>
 
-namespace
-{
-  const char *const usage_text =
+namespace {
+const char* const usage_text =
     "usage: pd-fem PRMFILE [-o DIR] [--levels N] [--coarse] [--check REFERENCE.json]\n"
     "       pd-fem --print-parameters | --kirchhoff-selftest | --help\n"
     "\n"
-    "Solves 3D linear elasticity with deal.II on a sequence of refined meshes\n"
+    "Solves linear elasticity (3D, or 2D plane stress / plane strain) with deal.II\n"
+    "on a sequence of refined meshes\n"
     "and writes summary.json, deflection lines (CSV) and solution.vtu.\n"
     "\n"
     "  PRMFILE            deal.II parameter file (see fem_reference/prm/)\n"
@@ -99,231 +106,183 @@ namespace
     "  --kirchhoff-selftest  verify the Kirchhoff plate series solver\n"
     "  --help             this text\n";
 
-  struct Arguments
-  {
-    std::string  prm_file, output_dir, check_file;
-    int          levels = -1;
-    bool         coarse = false;
-  };
+struct Arguments {
+  std::string prm_file, output_dir, check_file;
+  int levels = -1;
+  bool coarse = false;
+};
 
-  // Compare a run with a stored reference summary.json. Returns true if all
-  // checks pass and prints one line per check.
-  bool check_against_reference(const pdfem::RunSummary &run,
-                               const std::string &      reference_file)
-  {
-    namespace pt = boost::property_tree;
-    pt::ptree ref;
-    try
-      {
-        pt::read_json(reference_file, ref);
-      }
-    catch (const std::exception &e)
-      {
-        throw std::runtime_error("cannot read reference file '" +
-                                 reference_file + "': " + e.what());
-      }
-    using path = pt::ptree::path_type;
-    bool ok    = true;
-    for (const auto &q : run.quantities)
-      {
-        const auto node =
-          ref.get_child_optional(path("quantities/" + q.name, '/'));
-        if (!node)
-          {
-            std::printf("CHECK FAIL %s: quantity missing in %s\n",
-                        q.name.c_str(), reference_file.c_str());
-            ok = false;
-            continue;
-          }
-        const double ref_value = node->get<double>("value");
-        const double ref_error = node->get<double>("error_estimate");
-        // The reference is converged to ~0.1 %; the run under test (e.g. the
-        // coarse levels) is accurate to its own Richardson estimate. Their
-        // difference must be explained by the two estimates (1.5x safety on
-        // the run's estimate, which comes from coarse levels).
-        const double tol  = 1.5 * q.richardson.error_estimate + ref_error +
-                           1e-9 * std::abs(ref_value);
-        const double diff = std::abs(q.finest - ref_value);
-        const bool   pass = diff <= tol;
-        ok                = ok && pass;
-        std::printf("CHECK %s %-14s value %.8e  reference %.8e  |diff| %.3e"
-                    " (%.3f %%)  allowed %.3e  (estimated error of this run "
-                    "%.3e, of the reference %.3e)\n",
-                    pass ? "PASS" : "FAIL", q.name.c_str(), q.finest,
-                    ref_value, diff, 100. * diff / std::abs(ref_value), tol,
-                    q.richardson.error_estimate, ref_error);
-
-        // Level-by-level reproduction of the stored values.
-        unsigned int matched = 0;
-        for (const auto &level : run.levels)
-          for (const auto &rl : ref.get_child("levels"))
-            if (rl.second.get<unsigned long>("dofs") == level.dofs &&
-                rl.second.get<unsigned int>("cells") == level.cells)
-              {
-                const double stored = rl.second.get<double>(
-                  path("deflection/" + q.name, '/'));
-                const double value = level.deflection.at(q.name);
-                const double rel   = std::abs(value - stored) / std::abs(stored);
-                const bool   same  = rel <= 1e-6;
-                ok                 = ok && same;
-                ++matched;
-                std::printf("CHECK %s %-14s level %u (%lu dofs) value %.10e "
-                            "stored %.10e  rel. diff %.2e (allowed 1e-6)\n",
-                            same ? "PASS" : "FAIL", q.name.c_str(),
-                            level.level,
-                            static_cast<unsigned long>(level.dofs), value,
-                            stored, rel);
-              }
-        if (matched == 0)
-          {
-            std::printf("CHECK FAIL %s: no level of this run is stored in "
-                        "the reference (different mesh or element?)\n",
-                        q.name.c_str());
-            ok = false;
-          }
-      }
-    return ok;
+// Compare a run with a stored reference summary.json. Returns true if all
+// checks pass and prints one line per check.
+bool check_against_reference(const pdfem::RunSummary& run, const std::string& reference_file) {
+  namespace pt = boost::property_tree;
+  pt::ptree ref;
+  try {
+    pt::read_json(reference_file, ref);
+  } catch (const std::exception& e) {
+    throw std::runtime_error("cannot read reference file '" + reference_file + "': " + e.what());
   }
+  using path = pt::ptree::path_type;
+  bool ok = true;
+  for (const auto& q : run.quantities) {
+    const auto node = ref.get_child_optional(path("quantities/" + q.name, '/'));
+    if (!node) {
+      std::printf("CHECK FAIL %s: quantity missing in %s\n", q.name.c_str(),
+                  reference_file.c_str());
+      ok = false;
+      continue;
+    }
+    const double ref_value = node->get<double>("value");
+    const double ref_error = node->get<double>("error_estimate");
+    // The reference is converged to ~0.1 %; the run under test (e.g. the
+    // coarse levels) is accurate to its own Richardson estimate. Their
+    // difference must be explained by the two estimates (1.5x safety on
+    // the run's estimate, which comes from coarse levels).
+    const double tol = 1.5 * q.richardson.error_estimate + ref_error + 1e-9 * std::abs(ref_value);
+    const double diff = std::abs(q.finest - ref_value);
+    const bool pass = diff <= tol;
+    ok = ok && pass;
+    std::printf("CHECK %s %-14s value %.8e  reference %.8e  |diff| %.3e"
+                " (%.3f %%)  allowed %.3e  (estimated error of this run "
+                "%.3e, of the reference %.3e)\n",
+                pass ? "PASS" : "FAIL", q.name.c_str(), q.finest, ref_value, diff,
+                100. * diff / std::abs(ref_value), tol, q.richardson.error_estimate, ref_error);
+
+    // Level-by-level reproduction of the stored values.
+    unsigned int matched = 0;
+    for (const auto& level : run.levels)
+      for (const auto& rl : ref.get_child("levels"))
+        if (rl.second.get<unsigned long>("dofs") == level.dofs &&
+            rl.second.get<unsigned int>("cells") == level.cells) {
+          const double stored = rl.second.get<double>(path("deflection/" + q.name, '/'));
+          const double value = level.deflection.at(q.name);
+          const double rel = std::abs(value - stored) / std::abs(stored);
+          const bool same = rel <= 1e-6;
+          ok = ok && same;
+          ++matched;
+          std::printf("CHECK %s %-14s level %u (%lu dofs) value %.10e "
+                      "stored %.10e  rel. diff %.2e (allowed 1e-6)\n",
+                      same ? "PASS" : "FAIL", q.name.c_str(), level.level,
+                      static_cast<unsigned long>(level.dofs), value, stored, rel);
+        }
+    if (matched == 0) {
+      std::printf("CHECK FAIL %s: no level of this run is stored in "
+                  "the reference (different mesh or element?)\n",
+                  q.name.c_str());
+      ok = false;
+    }
+  }
+  return ok;
+}
 } // namespace
 
-int main(int argc, char **argv)
-{
+int main(int argc, char** argv) {
   using namespace dealii;
-  try
-    {
-      // Trilinos (Epetra) matrices need MPI to be initialised; one process,
-      // threads for the assembly (all cores unless DEAL_II_NUM_THREADS).
-      Utilities::MPI::MPI_InitFinalize mpi(argc, argv,
-                                           numbers::invalid_unsigned_int);
-      if (Utilities::MPI::n_mpi_processes(MPI_COMM_WORLD) != 1)
-        throw std::runtime_error("pd-fem runs as a single MPI process");
+  try {
+    // Trilinos (Epetra) matrices need MPI to be initialised; one process,
+    // threads for the assembly (all cores unless DEAL_II_NUM_THREADS).
+    Utilities::MPI::MPI_InitFinalize mpi(argc, argv, numbers::invalid_unsigned_int);
+    if (Utilities::MPI::n_mpi_processes(MPI_COMM_WORLD) != 1)
+      throw std::runtime_error("pd-fem runs as a single MPI process");
 
-      Arguments   args;
-      std::string command_line = "pd-fem";
-      for (int i = 1; i < argc; ++i)
-        command_line += std::string(" ") + argv[i];
+    Arguments args;
+    std::string command_line = "pd-fem";
+    for (int i = 1; i < argc; ++i)
+      command_line += std::string(" ") + argv[i];
 
-      auto need_value = [&](int &i) -> std::string {
-        if (i + 1 >= argc)
-          throw std::runtime_error(std::string("option ") + argv[i] +
-                                   " needs a value\n" + usage_text);
-        return argv[++i];
-      };
-      for (int i = 1; i < argc; ++i)
-        {
-          const std::string a = argv[i];
-          if (a == "--help" || a == "-h")
-            {
-              std::cout << usage_text;
-              return 0;
-            }
-          else if (a == "--print-parameters")
-            {
-              ParameterHandler prm;
-              pdfem::Parameters::declare(prm);
-              prm.print_parameters(std::cout, ParameterHandler::PRM);
-              return 0;
-            }
-          else if (a == "--kirchhoff-selftest")
-            return pdfem::kirchhoff_selftest() ? 0 : 2;
-          else if (a == "-o")
-            args.output_dir = need_value(i);
-          else if (a == "--levels")
-            {
-              const std::string v = need_value(i);
-              args.levels         = Utilities::string_to_int(v);
-              if (args.levels < 1 || args.levels > 8)
-                throw std::runtime_error("--levels must be between 1 and 8");
-            }
-          else if (a == "--coarse")
-            args.coarse = true;
-          else if (a == "--check")
-            args.check_file = need_value(i);
-          else if (!a.empty() && a[0] == '-')
-            throw std::runtime_error("unknown option '" + a + "'\n" +
-                                     usage_text);
-          else if (args.prm_file.empty())
-            args.prm_file = a;
-          else
-            throw std::runtime_error("more than one parameter file given\n" +
-                                     std::string(usage_text));
-        }
-      if (args.prm_file.empty())
-        throw std::runtime_error(std::string("no parameter file given\n") +
+    auto need_value = [&](int& i) -> std::string {
+      if (i + 1 >= argc)
+        throw std::runtime_error(std::string("option ") + argv[i] + " needs a value\n" +
                                  usage_text);
-
-      ParameterHandler prm;
-      pdfem::Parameters::declare(prm);
-      // Throws with the file name and line number on any bad entry.
-      prm.parse_input(args.prm_file);
-      pdfem::Parameters parameters;
-      parameters.parse(prm);
-
-      unsigned int n_levels =
-        args.coarse ? parameters.n_coarse_levels : parameters.n_levels;
-      if (args.levels > 0)
-        n_levels = static_cast<unsigned int>(args.levels);
-      const std::filesystem::path out_dir =
-        args.output_dir.empty() ?
-          std::filesystem::path("fem_reference") / "out" / parameters.name :
-          std::filesystem::path(args.output_dir);
-
-      std::ostringstream prm_json, prm_text;
-      prm.print_parameters(prm_json, ParameterHandler::ShortJSON);
-      prm.print_parameters(prm_text, ParameterHandler::ShortPRM);
-
-      pdfem::ElasticReference solver(parameters, n_levels, out_dir);
-      const pdfem::RunSummary summary =
-        solver.run(command_line, prm_json.str(), prm_text.str());
-
-      for (const auto &q : summary.quantities)
-        {
-          std::printf("%s: %-14s deflection %.8e m (finest), extrapolated "
-                      "%.8e m, observed order %s, estimated error %s\n",
-                      parameters.name.c_str(), q.name.c_str(), q.finest,
-                      q.richardson.extrapolated,
-                      q.richardson.order ?
-                        std::to_string(*q.richardson.order).c_str() :
-                        "n/a",
-                      q.richardson.valid ?
-                        (std::to_string(100. * q.richardson.relative_error) +
-                         " %").c_str() :
-                        "n/a (needs 3 levels in the asymptotic range)");
-        }
-      std::printf("%s: wall time %.2f s; output in %s\n",
-                  parameters.name.c_str(), summary.wall_time,
-                  out_dir.string().c_str());
-
-      if (!args.check_file.empty())
-        {
-          if (!check_against_reference(summary, args.check_file))
-            {
-              std::fprintf(stderr, "pd-fem: check against %s FAILED\n",
-                           args.check_file.c_str());
-              return 2;
-            }
-          std::printf("check against %s passed\n", args.check_file.c_str());
-        }
+      return argv[++i];
+    };
+    for (int i = 1; i < argc; ++i) {
+      const std::string a = argv[i];
+      if (a == "--help" || a == "-h") {
+        std::cout << usage_text;
+        return 0;
+      } else if (a == "--print-parameters") {
+        ParameterHandler prm;
+        pdfem::Parameters::declare(prm);
+        prm.print_parameters(std::cout, ParameterHandler::PRM);
+        return 0;
+      } else if (a == "--kirchhoff-selftest")
+        return pdfem::kirchhoff_selftest() ? 0 : 2;
+      else if (a == "-o")
+        args.output_dir = need_value(i);
+      else if (a == "--levels") {
+        const std::string v = need_value(i);
+        args.levels = Utilities::string_to_int(v);
+        if (args.levels < 1 || args.levels > 8)
+          throw std::runtime_error("--levels must be between 1 and 8");
+      } else if (a == "--coarse")
+        args.coarse = true;
+      else if (a == "--check")
+        args.check_file = need_value(i);
+      else if (!a.empty() && a[0] == '-')
+        throw std::runtime_error("unknown option '" + a + "'\n" + usage_text);
+      else if (args.prm_file.empty())
+        args.prm_file = a;
+      else
+        throw std::runtime_error("more than one parameter file given\n" + std::string(usage_text));
     }
-  catch (const dealii::ExceptionBase &e)
-    {
-      // deal.II exceptions (e.g. a bad .prm entry): print the message
-      // ("Line <7> of file <x.prm>: ..."), not the source location and
-      // stack trace of the library.
-      std::cerr << "pd-fem: error: ";
-      e.print_info(std::cerr);
-      std::cerr << std::endl;
-      return 1;
+    if (args.prm_file.empty())
+      throw std::runtime_error(std::string("no parameter file given\n") + usage_text);
+
+    ParameterHandler prm;
+    pdfem::Parameters::declare(prm);
+    // Throws with the file name and line number on any bad entry.
+    prm.parse_input(args.prm_file);
+    pdfem::Parameters parameters;
+    parameters.parse(prm);
+
+    unsigned int n_levels = args.coarse ? parameters.n_coarse_levels : parameters.n_levels;
+    if (args.levels > 0)
+      n_levels = static_cast<unsigned int>(args.levels);
+    const std::filesystem::path out_dir =
+        args.output_dir.empty() ? std::filesystem::path("fem_reference") / "out" / parameters.name
+                                : std::filesystem::path(args.output_dir);
+
+    std::ostringstream prm_json, prm_text;
+    prm.print_parameters(prm_json, ParameterHandler::ShortJSON);
+    prm.print_parameters(prm_text, ParameterHandler::ShortPRM);
+
+    const pdfem::RunSummary summary = pdfem::solve_reference(
+        parameters, n_levels, out_dir, command_line, prm_json.str(), prm_text.str());
+
+    for (const auto& q : summary.quantities) {
+      std::printf("%s: %-14s deflection %.8e m (finest), extrapolated "
+                  "%.8e m, observed order %s, estimated error %s\n",
+                  parameters.name.c_str(), q.name.c_str(), q.finest, q.richardson.extrapolated,
+                  q.richardson.order ? std::to_string(*q.richardson.order).c_str() : "n/a",
+                  q.richardson.valid
+                      ? (std::to_string(100. * q.richardson.relative_error) + " %").c_str()
+                      : "n/a (needs 3 levels in the asymptotic range)");
     }
-  catch (const std::exception &e)
-    {
-      std::cerr << "pd-fem: error: " << e.what() << std::endl;
-      return 1;
+    std::printf("%s: wall time %.2f s; output in %s\n", parameters.name.c_str(), summary.wall_time,
+                out_dir.string().c_str());
+
+    if (!args.check_file.empty()) {
+      if (!check_against_reference(summary, args.check_file)) {
+        std::fprintf(stderr, "pd-fem: check against %s FAILED\n", args.check_file.c_str());
+        return 2;
+      }
+      std::printf("check against %s passed\n", args.check_file.c_str());
     }
-  catch (...)
-    {
-      std::cerr << "pd-fem: error: unknown exception" << std::endl;
-      return 1;
-    }
+  } catch (const dealii::ExceptionBase& e) {
+    // deal.II exceptions (e.g. a bad .prm entry): print the message
+    // ("Line <7> of file <x.prm>: ..."), not the source location and
+    // stack trace of the library.
+    std::cerr << "pd-fem: error: ";
+    e.print_info(std::cerr);
+    std::cerr << std::endl;
+    return 1;
+  } catch (const std::exception& e) {
+    std::cerr << "pd-fem: error: " << e.what() << std::endl;
+    return 1;
+  } catch (...) {
+    std::cerr << "pd-fem: error: unknown exception" << std::endl;
+    return 1;
+  }
   return 0;
 }

@@ -1,7 +1,8 @@
 """Closed-form deflection lines of the beams (Euler–Bernoulli and Timoshenko, uniform load p).
 
 Parameters come from the `theory` object of fem_reference/reference/NAME.json (L, E, G, I, A, kappa,
-p_N_per_m).  Deflections are positive downward, as everywhere in the report.
+p_N_per_m; E_bending where the bending modulus is not E: plane strain's E/(1 − ν²)).  Deflections are
+positive downward, as everywhere in the report.
 
 Clamped–clamped beam, span L:
     w_EB(x) = p x² (L − x)² / (24 E I)                      (midspan p L⁴ / (384 E I))
@@ -16,7 +17,7 @@ from __future__ import annotations
 def _params(theory: dict) -> tuple[float, float, float, float, float, float, float]:
     p = float(theory["p_N_per_m"])
     length = float(theory["L"])
-    e = float(theory["E"])
+    e = float(theory.get("E_bending", theory["E"]))
     g = float(theory["G"])
     i = float(theory["I"])
     a = float(theory["A"])

@@ -7,9 +7,10 @@
 //
 // Where PD is evaluated: particles sit at cell centres, so a point such as the beam's centre line
 // (y = b/2, z = h/2) or the plate's free edge (y = 3 m) generally lies between particle layers or
-// half a spacing outside the outer layer. The PD value there is the trilinear interpolation between
-// the two nearest layers in each direction (linear extrapolation for points on the surface), so PD
-// and FE are compared at the same physical point.
+// half a spacing outside the outer layer. The PD value there is the trilinear (2D scenes:
+// bilinear, points of two coordinates) interpolation between the two nearest layers in each
+// direction (linear extrapolation for points on the surface), so PD and FE are compared at the
+// same physical point. The deflection is −u_z, in 2D −u_y.
 //
 // Steady state, not step counts: the run stops at the scene's steady-state tolerance. The
 // paper-resolution case also reruns with a 10× tighter tolerance and reports the difference as
@@ -77,7 +78,9 @@ struct StructureCase {
   /// Surface + volume correction pairs the structural scenes ran with before the library's
   /// defaults (ghost + gradient), so the sweep shows what the defaults bought.
   std::vector<CorrectionPair> sweep_corrections;
-  /// Section-stiffness error budget (section_stiffness.hpp): axes of the main body.
+  /// Section-stiffness error budget (section_stiffness.hpp): axes of the main body; only for a
+  /// case file with a `section:` block.
+  bool has_section = false;
   int section_span = 0;
   int section_depth = 2;
   bool section_plate = false;
@@ -141,6 +144,7 @@ StructureCase load_case(const std::filesystem::path& file) {
     }
     c.gate = read_map(root["gate"]);
     if (const auto sec = root["section"]) {
+      c.has_section = true;
       c.section_span = axis_of(sec["span"].as<std::string>());
       c.section_depth = axis_of(sec["depth"].as<std::string>());
       c.section_plate = sec["plate"].as<bool>(false);
@@ -227,18 +231,18 @@ double interpolate(const std::vector<std::pair<double, double>>& f, double x) {
   return f.back().second;
 }
 
-/// Downward deflection −u_z of the final PD field, interpolated from lattice layers.
+/// Downward deflection of the final PD field (−u_z; 2D: −u_y), interpolated from lattice layers.
 class DeflectionField {
 public:
-  DeflectionField(const RunOutcome& run, const LatticeSpec& lattice, const Region& body)
-      : run_(run), lattice_(lattice) {
+  DeflectionField(const RunOutcome& run, const LatticeSpec& lattice, const Region& body, int dim)
+      : run_(run), lattice_(lattice), dim_(dim) {
     const double tol = 1e-6 * lattice.spacing;
     for (std::size_t i = 0; i < run.positions.size(); ++i) {
-      if (!body.contains(run.positions[i], 3, tol)) {
+      if (!body.contains(run.positions[i], dim_, tol)) {
         continue; // supports are not part of the measured body
       }
       std::array<long long, 3> key{};
-      for (int a = 0; a < 3; ++a) {
+      for (int a = 0; a < dim_; ++a) {
         key[a] = index(a, run.positions[i][a]);
         layers_[a].insert(key[a]);
       }
@@ -246,13 +250,16 @@ public:
     }
   }
 
-  /// Interpolated deflection at p; each coordinate with `use[a] = false` is taken from `key`
-  /// instead.
+  /// Interpolated deflection at p: bilinear (2D) or trilinear (3D) between the particle layers
+  /// around it; coordinates beyond the dimension are ignored.
   double at(const Vec3& p) const {
-    std::array<std::array<std::pair<long long, double>, 2>, 3> w{};
+    using Weights = std::array<std::pair<long long, double>, 2>;
+    std::array<Weights, 3> w{};
     for (int a = 0; a < 3; ++a) {
-      w[a] = weights(a, p[a]);
+      // An axis beyond the dimension has the one layer 0: a weight of 1 and one of 0 on itself.
+      w[a] = a < dim_ ? weights(a, p[a]) : Weights{{{0, 1.0}, {0, 0.0}}};
     }
+    const auto vertical = static_cast<std::size_t>(dim_ - 1);
     double sum = 0;
     for (const auto& [i, wi] : w[0]) {
       for (const auto& [j, wj] : w[1]) {
@@ -261,7 +268,7 @@ public:
           if (it == particle_.end()) {
             return std::nan("");
           }
-          sum += wi * wj * wk * -run_.displacement[3 * it->second + 2];
+          sum += wi * wj * wk * -run_.displacement[3 * it->second + vertical];
         }
       }
     }
@@ -306,6 +313,7 @@ private:
 
   const RunOutcome& run_;
   LatticeSpec lattice_;
+  int dim_ = 3;
   std::array<std::set<long long>, 3> layers_;
   std::map<std::array<long long, 3>, std::size_t> particle_;
 };
@@ -313,11 +321,12 @@ private:
 /// Apply a different spacing (CI variant, sweeps): the load layers follow the top particle layer.
 void set_spacing(Scene& scene, double spacing) {
   const double old = scene.model.lattice.spacing;
+  const int vertical = scene.model.dimension.dim - 1;
   scene.model.lattice.spacing = spacing;
   for (LoadSpec& l : scene.model.loads) {
     for (Box& b : l.load.region.boxes) {
-      if (b.hi[2] - b.lo[2] <= old * (1 + 1e-9)) { // a single top layer: keep it one layer
-        b.lo[2] = b.hi[2] - 0.5 * spacing;
+      if (b.hi[vertical] - b.lo[vertical] <= old * (1 + 1e-9)) { // one top layer: keep it one
+        b.lo[vertical] = b.hi[vertical] - 0.5 * spacing;
       }
     }
   }
@@ -334,7 +343,8 @@ Json run_once(const Scene& scene, const StructureCase& c, const Context& ctx,
   if (outcome.result.status == RunStatus::unstable) {
     throw std::runtime_error(c.name + ": " + outcome.result.message);
   }
-  const DeflectionField field(outcome, scene.model.lattice, scene.model.bodies.front().region);
+  const DeflectionField field(outcome, scene.model.lattice, scene.model.bodies.front().region,
+                              scene.model.dimension.dim);
   for (const auto& q : c.quantities) {
     values[q.name] = field.at(q.point);
   }
@@ -389,6 +399,53 @@ YAML::Node load_fe_summary(const std::string& name) {
   } catch (const YAML::Exception& e) {
     throw std::runtime_error("cannot read FE reference " + path.string() + ": " + e.msg);
   }
+}
+
+/// The section-stiffness error budget of a case with a `section:` block, into out; returns the
+/// lines to print.
+std::string error_budget(const Scene& scene, const StructureCase& c, const YAML::Node& fe,
+                         const std::map<std::string, double>& values, Json& out) {
+  const SectionStiffness section = section_of(scene, c);
+  out["section_stiffness"] = section_json(section);
+  // Error budget: the deflection factor the section's stiffness alone predicts, its bending and
+  // shear parts weighted as theory splits the deflection (Euler–Bernoulli + Timoshenko's shear term
+  // for a beam; Kirchhoff + the rest of the FE value for the plate), and what the measurement
+  // leaves beyond it: the supports, the load and the ends.
+  const YAML::Node theory = fe["theory"];
+  std::map<std::string, double> section_factor, measured_factor;
+  for (const auto& q : c.quantities) {
+    const double fe_value = fe["quantities"][q.fe_key]["extrapolated"].as<double>();
+    double total = fe_value;
+    double bending = fe_value;
+    if (theory["euler_bernoulli"]) {
+      total = theory["timoshenko"].as<double>();
+      bending = theory["euler_bernoulli"].as<double>();
+    } else if (theory["quantities"] && theory["quantities"][q.fe_key]) {
+      bending = theory["quantities"][q.fe_key]["kirchhoff"].as<double>();
+    }
+    section_factor[q.name] =
+        (bending / section.bending + (total - bending) / section.shear) / total;
+    measured_factor[q.name] = values.at(q.name) / fe_value;
+    Json& b = out["error_budget"][q.name];
+    b["measured_factor"] = measured_factor[q.name];
+    b["section_factor"] = section_factor[q.name];
+    b["remaining_factor"] = measured_factor[q.name] / section_factor[q.name];
+  }
+  out["error_budget"]["meaning"] =
+      "deflection PD/FE = section_factor × remaining_factor; section_factor from "
+      "section_stiffness with the bending and shear parts of the deflection weighted as theory "
+      "splits it; remaining_factor: supports (fixed particle blocks), load and ends";
+  std::string text = fmt::format(
+      "   section stiffness PD/continuum: bending {:.4f}, shear {:.4f}, membrane {:.4f}\n",
+      section.bending, section.shear, section.membrane);
+  for (const auto& q : c.quantities) {
+    text += fmt::format(
+        "   error budget of {}: the section predicts x{:.4f}, measured x{:.4f}: x{:.4f} from "
+        "supports, load and ends\n",
+        q.name, section_factor[q.name], measured_factor[q.name],
+        measured_factor[q.name] / section_factor[q.name]);
+  }
+  return text;
 }
 
 Json run_structure(const Context& ctx, const std::string& case_name, bool fast) {
@@ -453,36 +510,8 @@ Json run_structure(const Context& ctx, const std::string& case_name, bool fast) 
     out["error"]["line_" + name + "_max_over_max_fe"] = e;
   }
   out["lines"] = lines;
-  const SectionStiffness section = section_of(scene, c);
-  out["section_stiffness"] = section_json(section);
-  // Error budget: the deflection factor the section's stiffness alone predicts, its bending and
-  // shear parts weighted as theory splits the deflection (Euler–Bernoulli + Timoshenko's shear term
-  // for a beam; Kirchhoff + the rest of the FE value for the plate), and what the measurement
-  // leaves beyond it: the supports, the load and the ends.
-  const YAML::Node theory = fe["theory"];
-  std::map<std::string, double> section_factor, measured_factor;
-  for (const auto& q : c.quantities) {
-    const double fe_value = fe["quantities"][q.fe_key]["extrapolated"].as<double>();
-    double total = fe_value;
-    double bending = fe_value;
-    if (theory["euler_bernoulli"]) {
-      total = theory["timoshenko"].as<double>();
-      bending = theory["euler_bernoulli"].as<double>();
-    } else if (theory["quantities"] && theory["quantities"][q.fe_key]) {
-      bending = theory["quantities"][q.fe_key]["kirchhoff"].as<double>();
-    }
-    section_factor[q.name] =
-        (bending / section.bending + (total - bending) / section.shear) / total;
-    measured_factor[q.name] = values[q.name] / fe_value;
-    Json& b = out["error_budget"][q.name];
-    b["measured_factor"] = measured_factor[q.name];
-    b["section_factor"] = section_factor[q.name];
-    b["remaining_factor"] = measured_factor[q.name] / section_factor[q.name];
-  }
-  out["error_budget"]["meaning"] =
-      "deflection PD/FE = section_factor × remaining_factor; section_factor from "
-      "section_stiffness with the bending and shear parts of the deflection weighted as theory "
-      "splits it; remaining_factor: supports (fixed particle blocks), load and ends";
+  // Printed after the quantities.
+  const std::string budget_text = c.has_section ? error_budget(scene, c, fe, values, out) : "";
   out["wall_seconds_run"] = run.result.wall_seconds;
   out["steps"] = run.result.steps;
   out["bond_updates"] =
@@ -509,7 +538,11 @@ Json run_structure(const Context& ctx, const std::string& case_name, bool fast) 
     Scene tight = scene;
     tight.solver.steady.force_tolerance *= 0.1;
     tight.solver.steady.kinetic_tolerance *= 0.01;
-    tight.solver.end_time = scene.solver.end_time.value_or(0) * 10;
+    // A scene without end_time (the static solver needs none) keeps none: 0 would stop the run
+    // before its solve.
+    if (scene.solver.end_time) {
+      tight.solver.end_time = *scene.solver.end_time * 10;
+    }
     std::map<std::string, double> tight_values, tight_lines;
     RunOutcome tight_run;
     run_once(tight, c, ctx, "-tight", tight_values, tight_lines, tight_run);
@@ -533,15 +566,7 @@ Json run_structure(const Context& ctx, const std::string& case_name, bool fast) 
                    ? fmt::format("{:.1f} %", 100 * (fast ? c.fast_gate : c.gate).at(q.name))
                    : std::string("none"));
   }
-  fmt::print("   section stiffness PD/continuum: bending {:.4f}, shear {:.4f}, membrane {:.4f}\n",
-             section.bending, section.shear, section.membrane);
-  for (const auto& q : c.quantities) {
-    fmt::print(
-        "   error budget of {}: the section predicts x{:.4f}, measured x{:.4f}: x{:.4f} from "
-        "supports, load and ends\n",
-        q.name, section_factor[q.name], measured_factor[q.name],
-        measured_factor[q.name] / section_factor[q.name]);
-  }
+  fmt::print("{}", budget_text);
   fmt::print("   {} particles, {} bonds, {} steps, {:.1f} s, status {}\n", run.particles, run.bonds,
              run.result.steps, run.result.wall_seconds, to_string(run.result.status));
   return out;
@@ -674,7 +699,9 @@ Json run_structure_sweep(const Context& ctx, const std::string& case_name) {
         static_cast<double>(run.bonds) * static_cast<double>(run.result.force_evaluations);
     row["particles"] = run.particles;
     row["bonds"] = run.bonds;
-    row["section_stiffness"] = section_json(section_of(v.scene, c));
+    if (c.has_section) {
+      row["section_stiffness"] = section_json(section_of(v.scene, c));
+    }
     if (v.knob == "spacing" || v.knob == "baseline") {
       spacing_error.emplace_back(v.scene.model.lattice.spacing,
                                  relative_error(values[first_quantity], first_fe));
@@ -742,5 +769,23 @@ Json run_cantilever_sweep(const Context& ctx) {
 }
 Json run_plate_sweep(const Context& ctx) {
   return run_structure_sweep(ctx, "plate-3clamped");
+}
+Json run_cantilever_2d(const Context& ctx) {
+  return run_structure(ctx, "cantilever-2d", false);
+}
+Json run_clamped_beam_2d(const Context& ctx) {
+  return run_structure(ctx, "clamped-beam-2d", false);
+}
+Json run_cantilever_2d_fast(const Context& ctx) {
+  return run_structure(ctx, "cantilever-2d", true);
+}
+Json run_clamped_beam_2d_fast(const Context& ctx) {
+  return run_structure(ctx, "clamped-beam-2d", true);
+}
+Json run_cantilever_2d_sweep(const Context& ctx) {
+  return run_structure_sweep(ctx, "cantilever-2d");
+}
+Json run_clamped_beam_2d_sweep(const Context& ctx) {
+  return run_structure_sweep(ctx, "clamped-beam-2d");
 }
 } // namespace pd::verification

@@ -21,6 +21,12 @@ Json run_plate_fast(const Context& ctx);
 Json run_clamped_beam_sweep(const Context& ctx);
 Json run_cantilever_sweep(const Context& ctx);
 Json run_plate_sweep(const Context& ctx);
+Json run_cantilever_2d(const Context& ctx);
+Json run_clamped_beam_2d(const Context& ctx);
+Json run_cantilever_2d_fast(const Context& ctx);
+Json run_clamped_beam_2d_fast(const Context& ctx);
+Json run_cantilever_2d_sweep(const Context& ctx);
+Json run_clamped_beam_2d_sweep(const Context& ctx);
 /// A structure described by verification/cases/NAME.case.yaml: at the scene's resolution
 /// (`fast`: the case's CI spacing, regression and gates, no relaxation rerun), or its sweep.
 Json run_structure_case(const Context& ctx, const std::string& case_name, bool fast);

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <optional>
 #include <stdexcept>
 #include <utility>
 
@@ -214,8 +215,9 @@ GradientSystem gradient_system(const CorrectionSpec& spec, bool with_gradient) {
 }
 
 /// min Σ N_o (w_o − w̄)² subject to A w = b (b = 1), w ≥ 0, from the zero set `zero`: exact KKT
-/// solve on the free orbits, moving one orbit at a time between the sets until KKT holds.
-Vector closest_to_uniform(const GradientSystem& s, std::vector<bool> zero) {
+/// solve on the free orbits, moving one orbit at a time between the sets until KKT holds. Empty
+/// if the sets cycle instead (3D at some long horizons, m = 11.5, 12 or 13.5).
+std::optional<Vector> closest_to_uniform(const GradientSystem& s, std::vector<bool> zero) {
   const Eigen::Index n = s.a.cols();
   const Vector b = Vector::Ones(s.a.rows());
   const Vector wbar = Vector::Constant(n, s.uniform);
@@ -258,7 +260,52 @@ Vector closest_to_uniform(const GradientSystem& s, std::vector<bool> zero) {
       return w.cwiseMax(0.0);
     }
   }
-  throw std::logic_error("gradient weights: the active-set iteration did not converge");
+  return std::nullopt;
+}
+
+/// The same minimum through its dual, which cannot cycle: for multipliers ν of A w = b the
+/// minimising weights are w(ν) = max(0, w̄ + Aᵀν/N), and the dual g(ν) = ½ Σ N (w − w̄)² −
+/// νᵀ(A w − b) is concave and piecewise quadratic in one ν per matched row, with gradient
+/// b − A w(ν). Semismooth Newton on it (curvature A_F N⁻¹ A_Fᵀ over the non-zero weights) with a
+/// backtracking line search. Only a fallback, so that the weights the active set finds stay
+/// bit for bit what they were.
+Vector closest_to_uniform_by_dual(const GradientSystem& s) {
+  const Eigen::Index n = s.a.cols();
+  const Vector b = Vector::Ones(s.a.rows());
+  const Vector wbar = Vector::Constant(n, s.uniform);
+  const auto weights = [&](const Vector& nu) -> Vector {
+    return (wbar + (s.a.transpose() * nu).cwiseQuotient(s.count)).cwiseMax(0.0);
+  };
+  const auto dual = [&](const Vector& nu) {
+    const Vector w = weights(nu);
+    return 0.5 * (s.count.array() * (w - wbar).array().square()).sum() - nu.dot(s.a * w - b);
+  };
+  Vector nu = Vector::Zero(s.a.rows());
+  for (int iteration = 0; iteration < 500; ++iteration) {
+    const Vector w = weights(nu);
+    const Vector gradient = b - s.a * w;
+    if (gradient.lpNorm<Eigen::Infinity>() <= 1e-14) {
+      return w;
+    }
+    Matrix curvature = Matrix::Zero(s.a.rows(), s.a.rows());
+    for (Eigen::Index i = 0; i < n; ++i) {
+      if (w[i] > 0) {
+        curvature += s.a.col(i) * s.a.col(i).transpose() / s.count[i];
+      }
+    }
+    const Vector step = curvature.completeOrthogonalDecomposition().solve(gradient);
+    const double g0 = dual(nu), slope = gradient.dot(step);
+    double t = 1;
+    while (t > 1e-10 && dual(nu + t * step) < g0 + 1e-4 * t * slope) {
+      t *= 0.5;
+    }
+    const Vector next = nu + t * step;
+    if (next == nu) {
+      return w; // no further ascent at round-off: the caller reports the residual
+    }
+    nu = next;
+  }
+  throw std::logic_error("gradient weights: neither the active set nor its dual converged");
 }
 
 } // namespace
@@ -299,7 +346,8 @@ GradientWeights gradient_matched_weights(const CorrectionSpec& spec) {
   for (Eigen::Index i = 0; i < n; ++i) {
     zero[static_cast<std::size_t>(i)] = !(guess[i] > 0);
   }
-  Vector w = closest_to_uniform(s, zero);
+  const std::optional<Vector> active_set = closest_to_uniform(s, zero);
+  Vector w = active_set ? *active_set : closest_to_uniform_by_dual(s);
   // Weights at round-off of the largest (4e-15 on (0,1,2) at m = 2√3) are zeros the KKT solve
   // did not land on exactly: made exact, their bonds leave the family (model.cpp) instead of
   // costing kernel time for nothing. The residual below is measured after.

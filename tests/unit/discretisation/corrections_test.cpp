@@ -917,6 +917,22 @@ TEST(VolumeCorrection, MomentWeightsReproduceContinuumMoments) {
   }
 }
 
+TEST(GradientWeights, LongHorizonsWhereTheActiveSetCyclesUseItsDual) {
+  // At these horizons (3D) the active-set iteration moves orbits between its sets in a cycle
+  // (the scene fuzzer found m = 10 on block-tension); the dual Newton fallback must still match
+  // the moments and the gradient energy with non-negative weights. Where both converge they
+  // agree to 3e-14 of the largest weight (checked when the fallback was written).
+  for (double m : {11.5, 12.0, 13.5}) {
+    const auto w =
+        pd::gradient_matched_weights(gradient_spec(3, pd::PlaneMode::plane_stress, m, 0.1));
+    EXPECT_EQ(w.matched, pd::GradientWeights::Matched::moments_and_gradient) << "m " << m;
+    EXPECT_LT(w.residual, 1e-10) << "m " << m;
+    for (const auto& o : w.orbits) {
+      EXPECT_GE(o.weight, 0.0);
+    }
+  }
+}
+
 TEST(GradientWeights, ShortHorizonsFallBackToWhatTheLatticeCanMatch) {
   // Below m = 2 the gradient fields cannot be met; below √2 not even the 4th moments (no bond has
   // n_x n_y ≠ 0). The weights stay non-negative and say what they match.
