@@ -19,6 +19,7 @@
 #include "libpd/app/run.hpp"
 #include "libpd/discretisation/corrections.hpp"
 #include "libpd/io/scene.hpp"
+#include "observed_order.hpp"
 #include "section_stiffness.hpp"
 
 #include <algorithm>
@@ -585,20 +586,6 @@ StretchKind stretch_from(const std::string& s) {
   throw std::runtime_error("unknown stretch measure '" + s + "' in a sweep");
 }
 
-/// Least-squares slope of log(error) against log(spacing): the observed convergence order.
-double observed_order(const std::vector<std::pair<double, double>>& spacing_error) {
-  double sx = 0, sy = 0, sxx = 0, sxy = 0;
-  const double n = static_cast<double>(spacing_error.size());
-  for (const auto& [h, e] : spacing_error) {
-    const double x = std::log(h), y = std::log(e);
-    sx += x;
-    sy += y;
-    sxx += x * x;
-    sxy += x * y;
-  }
-  return (n * sxy - sx * sy) / (n * sxx - sx * sx);
-}
-
 struct SweepVariant {
   std::string knob;
   std::string value;
@@ -714,16 +701,15 @@ Json run_structure_sweep(const Context& ctx, const std::string& case_name) {
     // Rows are appended to the JSON-lines file as they come, so an interrupted sweep keeps them.
     write_file_atomically(ctx.output_dir / (c.name + "-sweep.jsonl"), rows_text);
   }
-  std::sort(spacing_error.begin(), spacing_error.end());
-  spacing_error.erase(std::unique(spacing_error.begin(), spacing_error.end(),
-                                  [](const auto& a, const auto& b) { return a.first == b.first; }),
-                      spacing_error.end());
   Json out;
   out["case"] = c.name + "-sweep";
   out["quantity"] = "error vs FE and wall time for each knob (rows in " + c.name + "-sweep.jsonl)";
   out["rows"] = rows;
   if (spacing_error.size() >= 2) {
-    out["observed_order_in_spacing"] = observed_order(spacing_error);
+    const ObservedOrder order = observed_order(spacing_error);
+    out["observed_order_in_spacing"] = order.order ? Json(*order.order) : Json(nullptr);
+    out["observed_order"] = to_json(order);
+    fmt::print("   observed order in λ of the {} error: {}\n", first_quantity, order.text());
   }
   out["gate"] = "none: a measurement";
   out["passed"] = true;

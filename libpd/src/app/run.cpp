@@ -10,6 +10,7 @@
 #include "libpd/app/run_checkpoints.hpp"
 #include "libpd/app/run_output.hpp"
 #include "libpd/app/run_summary.hpp"
+#include "libpd/kernel/round_off.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -144,6 +145,58 @@ private:
     checkpoints_.emplace(options_, sim_->integrator().checkpoint_refusal());
     check_run_size();
     check_time_step();
+    check_steady_tolerance();
+  }
+
+  // A force tolerance below the residual's round-off floor can never be met: the run would go on
+  // to end_time however converged it is. The check uses a tolerance just above the floor, and
+  // says so before the run (here when the loads fix the reference, after it when the reactions
+  // do) and in the summary.
+  void check_steady_tolerance() {
+    if (!steady_asked()) {
+      return;
+    }
+    const double used = sim_->steady_force_tolerance();
+    if (used > scene_.solver.steady.force_tolerance) {
+      warn_raised_tolerance(used);
+    }
+  }
+  void warn_raised_tolerance(double used) {
+    warned_tolerance_ = true;
+    warn(fmt::format("solver.steady.force_tolerance = {:.3g} is below the round-off floor of the "
+                     "residual under {} ({:.2g} of the reference force: positions carry about 16 "
+                     "digits of their distance from the origin, kernel/round_off.hpp); the steady "
+                     "check uses {:.3g} ({:g}× the floor) instead",
+                     scene_.solver.steady.force_tolerance, sim_->integrator().name(),
+                     used / round_off_margin, used, round_off_margin));
+  }
+
+  // A run that asked for a steady state and stopped at its time or step limit has not reached it:
+  // its numbers are not converged, and exit status 0 must not let that pass unremarked.
+  void check_steady_reached() {
+    if (!steady_asked()) {
+      return;
+    }
+    const RunResult& r = out_.result;
+    if (!warned_tolerance_ && r.force_tolerance > scene_.solver.steady.force_tolerance) {
+      warn_raised_tolerance(r.force_tolerance);
+    }
+    if (r.status != RunStatus::end_time && r.status != RunStatus::max_steps) {
+      return;
+    }
+    warn(fmt::format(
+        "the run asked for a steady state (solver.steady) but stopped at {} (step {}, t = {:.6g} "
+        "s) without reaching it: residual {:.3g} of the reference force (tolerance {:.3g}), "
+        "kinetic energy {:.3g} of the strain energy (tolerance {:.3g}); its results are not "
+        "converged",
+        r.status == RunStatus::end_time ? "solver.end_time" : "solver.max_steps", r.steps, r.time,
+        r.residual, r.force_tolerance,
+        r.strain_energy > 0 ? r.kinetic_energy / r.strain_energy : 0.0,
+        scene_.solver.steady.kinetic_tolerance));
+  }
+
+  bool steady_asked() const {
+    return scene_.solver.steady.enabled && scene_.solver.integrator != IntegratorKind::static_solve;
   }
 
   // Restore. A restart continues the state, the probe history and the list of VTU frames of
@@ -174,6 +227,7 @@ private:
     progress.clear();
     out_.stop_signal = interrupt.signal();
     out_.evaluations_this_run = out_.result.force_evaluations - evaluations_restored_;
+    check_steady_reached();
   }
 
   // What each step leaves behind: a probe row, a VTU frame and a checkpoint when they are due,
@@ -261,6 +315,7 @@ private:
   std::optional<RunOutputWriter> output_;
   std::optional<CheckpointPolicy> checkpoints_;
   std::optional<CheckpointFingerprint> fingerprint_;
+  bool warned_tolerance_ = false;
   RunOutcome out_;
 };
 

@@ -58,6 +58,10 @@ Json run_summary(const Scene& scene, const Simulation& sim, const RunOutcome& ou
   j["kinetic_energy"] = out.result.kinetic_energy;
   j["strain_energy"] = out.result.strain_energy;
   j["residual"] = out.result.residual;
+  if (scene.solver.steady.enabled) {
+    j["force_tolerance"] = out.result.force_tolerance; // the one the check used
+    j["residual_floor"] = out.result.residual_floor;
+  }
   j["memory_bytes"] = model.memory_bytes();
   j["peak_memory_bytes"] = peak_resident_bytes();
   if (Json details = sim.integrator().summary(); details.is_object()) {

@@ -49,6 +49,10 @@ public:
     return name_;
   }
 
+  double round_off_amplification(double dt) const override {
+    return kinematic_damping_amplification(model_, damping_, dt);
+  }
+
 private:
   Model& model_;
   ForceEvaluator& forces_;

@@ -5,6 +5,7 @@
 
 #include "libpd/core/binary_state.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <fmt/format.h>
 #include <limits>
@@ -37,6 +38,15 @@ void Integrator::restore(CheckpointReader& r) {
   force_evaluations_ = r.u64();
   calls_ = r.u64();
   restore_state(r);
+}
+
+double kinematic_damping_amplification(const Model& model, double damping, double dt) {
+  if (!(damping > 0) || model.density.empty()) {
+    return 1.0;
+  }
+  const double rho = *std::max_element(model.density.begin(), model.density.end());
+  const double loss = dt * damping / rho / (1.0 + dt * damping / rho); // 1 − ψ
+  return std::max(1.0, 0.5 / std::sqrt(loss));
 }
 
 std::vector<std::uint8_t> held_dofs(const Model& model) {

@@ -2,9 +2,11 @@
 
 #include "libpd/core/binary_state.hpp"
 #include "libpd/kernel/linear_operator.hpp"
+#include "libpd/kernel/round_off.hpp"
 #include "libpd/kernel/stable_time_step.hpp"
 #include "libpd/time/energy_watch.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <fmt/format.h>
@@ -71,6 +73,10 @@ Simulation::Simulation(Model& model, const SolverSpec& solver, const InitialSpec
                             ? solver.blowup_displacement
                             : std::max(diagonal, model.spec.lattice.spacing);
   blowup_squared_ = blowup * blowup;
+  if (solver.steady.enabled) {
+    residual_floor_ = residual_round_off_floor(model, state_.position.data(), constrained_) *
+                      integrator_->round_off_amplification(dt_);
+  }
 }
 
 void Simulation::perturb(const std::vector<double>& du) {
@@ -97,7 +103,7 @@ double Simulation::strain_energy() const {
   return forces_->strain_energy(state_.position.data());
 }
 
-double Simulation::relative_residual() const {
+Simulation::ForceBalance Simulation::force_balance() const {
   // Free degrees of freedom carry the out-of-balance force (b + F b_ext)·V; constrained ones carry
   // reactions, which normalise the residual when no load is applied.
   const double load = ramp_.factor(state_.time);
@@ -117,8 +123,35 @@ double Simulation::relative_residual() const {
       applied += ext * ext;
     }
   }
-  const double reference = applied > 0 ? applied : reactions;
-  return reference > 0 ? std::sqrt(residual / reference) : std::sqrt(residual);
+  return {std::sqrt(residual), std::sqrt(applied > 0 ? applied : reactions)};
+}
+
+double Simulation::full_load_norm() const {
+  double applied = 0;
+  const std::vector<double>& ext = model_.external_force_density;
+  for (std::size_t dof = 0; dof < ext.size(); ++dof) {
+    const double f = ext[dof] * model_.particles.volume[dof / 3];
+    applied += f * f;
+  }
+  return std::sqrt(applied);
+}
+
+double Simulation::force_tolerance_for(double reference) const {
+  const double requested = solver_.steady.force_tolerance;
+  return reference > 0 ? std::max(requested, round_off_margin * residual_floor_ / reference)
+                       : requested;
+}
+
+void Simulation::record_balance(RunResult& r) const {
+  const ForceBalance balance = force_balance();
+  r.residual = balance.relative();
+  r.force_tolerance = force_tolerance_for(balance.reference);
+  r.residual_floor = balance.reference > 0 ? residual_floor_ / balance.reference
+                                           : std::numeric_limits<double>::quiet_NaN();
+}
+
+double Simulation::steady_force_tolerance() const {
+  return force_tolerance_for(full_load_norm());
 }
 
 void Simulation::save(CheckpointWriter& w) const {
@@ -191,6 +224,8 @@ RunResult Simulation::run(const Observer& observer) {
   r.dt = dt_;
   r.dt_stable = dt_stable_;
   r.residual = std::numeric_limits<double>::quiet_NaN();
+  r.force_tolerance = std::numeric_limits<double>::quiet_NaN();
+  r.residual_floor = std::numeric_limits<double>::quiet_NaN();
   // Clamped: end_time / dt beyond 2^64 (scene fuzzing: end_time 1e300) must not overflow the
   // cast; max_steps stops such a run.
   const double end_count = solver_.end_time ? std::ceil(*solver_.end_time / dt_ - 1e-9) : 0.0;
@@ -244,9 +279,8 @@ RunResult Simulation::run(const Observer& observer) {
         state_.time >= solver_.ramp_time) {
       const double ke = kinetic_energy();
       const double u = strain_energy();
-      r.residual = relative_residual();
-      if (ke <= solver_.steady.kinetic_tolerance * u &&
-          r.residual <= solver_.steady.force_tolerance) {
+      record_balance(r);
+      if (ke <= solver_.steady.kinetic_tolerance * u && r.residual <= r.force_tolerance) {
         r.status = RunStatus::converged;
         break;
       }
@@ -264,7 +298,7 @@ RunResult Simulation::run(const Observer& observer) {
     r.kinetic_energy = kinetic_energy();
     r.strain_energy = strain_energy();
     if (solver_.steady.enabled) {
-      r.residual = relative_residual();
+      record_balance(r);
     }
     // Positions can stay finite while the energies overflow (scene fuzzing: a density of 1e-308
     // kg/m³ under ADR); never report such a run as a success.

@@ -23,6 +23,7 @@
 #include "libpd/core/binary_state.hpp"
 #include "libpd/kernel/force_kernel.hpp"
 #include "libpd/kernel/linear_operator.hpp"
+#include "libpd/kernel/round_off.hpp"
 #include "libpd/time/integrator.hpp"
 #include "sparse_factorisation.hpp"
 
@@ -267,16 +268,22 @@ private:
     };
     place(factor->solve(rhs));
     const double load = std::max(rhs.norm(), 1e-300);
+    std::vector<std::uint8_t> held(d.kind.size());
+    std::transform(d.kind.begin(), d.kind.end(), held.begin(),
+                   [](std::uint8_t kind) { return static_cast<std::uint8_t>(kind != 0); });
+    const double floor = residual_round_off_floor(model_, y, held) / load;
+    // A residual that stopped falling is accepted up to this: 1e-6 of the load, or just above
+    // the round-off floor where that is higher (a light load on a stiff, fine or far-off body).
+    const double acceptable = std::max(acceptable_residual, round_off_margin * floor);
     std::size_t iterations = 0;
     double residual = 0;
     double previous = std::numeric_limits<double>::infinity();
     for (;; ++iterations) {
       const Eigen::VectorXd r = residual_at(y);
       residual = r.norm() / load;
-      // Converged, or at the round-off floor of the force sums (the residual stops falling; a
-      // body force on a coarse 2D body floors near 1e-5 of the load, see issue 14).
-      const bool floor = residual <= acceptable_residual && residual > 0.5 * previous;
-      if (residual <= newton_tolerance || floor || iterations >= max_newton_iterations) {
+      // Converged, or at the round-off floor (the residual stops falling).
+      const bool stalled = residual <= acceptable && residual > 0.5 * previous;
+      if (residual <= newton_tolerance || stalled || iterations >= max_newton_iterations) {
         break;
       }
       previous = residual;
@@ -300,15 +307,17 @@ private:
     j["newton_seconds"] = s(t2, t3);
     j["newton_iterations"] = iterations;
     j["residual"] = residual;
+    j["round_off_floor"] = floor;
     report_ = fmt::format(
         "static solve: {} unknowns, {} nonzeros, {} ({} operator, ‖K−Kᵀ‖/‖K‖ = {:.1e}); "
         "assembly {:.3f} s, symmetry check {:.3f} s, factorisation {:.3f} s (factor {} nonzeros, "
-        "{:.1f} MiB), {} Newton iterations {:.3f} s, residual {:.2e} of the load",
+        "{:.1f} MiB), {} Newton iterations {:.3f} s, residual {:.2e} of the load (round-off floor "
+        "{:.1e})",
         n, nonzeros, factor->name(), symmetric ? "symmetric" : "nonsymmetric", asym, s(t0, t1),
         s(t1, t_check), s(t_check, t2), factor->factor_nonzeros(),
         static_cast<double>(factor->factor_bytes()) / (1024.0 * 1024.0), iterations, s(t2, t3),
-        residual);
-    if (residual > acceptable_residual) {
+        residual, floor);
+    if (residual > acceptable) {
       throw std::runtime_error(fmt::format("static solve did not converge: {}", report_));
     }
   }
@@ -365,7 +374,8 @@ private:
 
   static constexpr std::size_t max_cg_iterations = 50;
   static constexpr double newton_tolerance = 1e-10;
-  /// A residual that stopped falling is accepted below this (relative to the load).
+  /// A residual that stopped falling is accepted below this (relative to the load), or below
+  /// round_off_margin × the round-off floor where that is higher (kernel/round_off.hpp).
   static constexpr double acceptable_residual = 1e-6;
   static constexpr std::size_t max_newton_iterations = 50;
 

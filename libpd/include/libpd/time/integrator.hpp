@@ -152,6 +152,11 @@ public:
   /// Imaginary-axis stability interval of the method divided by that of central differences (2):
   /// the factor on the eq. 31 step that keeps the same margin. 1 for the Störmer-type schemes.
   virtual double stability_scale() const { return 1.0; }
+  /// How far above the residual's round-off floor (kernel/round_off.hpp) the method settles with
+  /// steps of dt: every step rounds the positions afresh, and the damping per step decides how much
+  /// of that noise the modes keep. 1 for a method that adds none (static) or never settles (no
+  /// damping).
+  virtual double round_off_amplification(double /*dt*/) const { return 1.0; }
 
   /// Checkpoints: everything the next step() reads besides the State and the model's bond
   /// history (counters, the integrator's own vectors and flags), so that a restored run continues
@@ -205,6 +210,14 @@ std::unique_ptr<Integrator> make_static_solver(const IntegratorSettings& setting
 /// ADR's fictitious density λ per degree of freedom (3N): ¼ Δt² times the Gershgorin row sum of
 /// the linearised bond operator, Δt = 1 (time/adr.cpp).
 std::vector<double> adr_fictitious_density(const Model& model);
+
+/// round_off_amplification of a scheme with kinematic damping c_v that rounds the positions once
+/// per step of dt: 1/(2 √(1 − ψ)) for the least damped particle (the densest), with
+/// ψ = (1 + Δt c_v/ρ)⁻¹. A mode keeps the energy ½ω²σ² that each step's rounding (variance σ²)
+/// adds until the damping takes 2(1 − ψ) of it per step, so its amplitude settles at
+/// σ/(2√(1 − ψ)). Damped Euler on a 2D steel cantilever at three dampings: 12.7, 30 and 62× the
+/// floor measured against 14.4, 24.9 and 49.9 predicted. At least 1.
+double kinematic_damping_amplification(const Model& model, double damping, double dt);
 
 /// Largest |u|² over particles (may be +inf), NaN as soon as any coordinate is not finite.
 StepReport displacement_report(const Model& model, const double* y);

@@ -16,7 +16,9 @@ namespace pd {
 
 /// Steady state: after the load ramp, kinetic energy ≤ kinetic_tolerance × strain energy and
 /// residual force norm ≤ force_tolerance × reference force (applied loads, or the support reactions
-/// when only displacements are prescribed). Checked every `check_every` steps.
+/// when only displacements are prescribed). Checked every `check_every` steps. A force_tolerance
+/// below the residual's round-off floor (kernel/round_off.hpp) could never be met: the check then
+/// uses round_off_margin × the floor instead (Simulation::steady_force_tolerance).
 struct SteadyStateCriterion {
   bool enabled = false;
   double kinetic_tolerance = 1e-10;
@@ -76,7 +78,13 @@ struct RunResult {
   std::size_t force_evaluations = 0;
   double kinetic_energy = 0;
   double strain_energy = 0;
-  double residual = 0; ///< relative residual force at the last steady-state check (NaN if none)
+  /// With a steady-state criterion, of the final state (NaN without one): the relative residual
+  /// force, the relative force tolerance of the check (the requested one, or just above the
+  /// round-off floor where that is higher) and that floor relative to the same reference (NaN
+  /// when the reference is 0).
+  double residual = 0;
+  double force_tolerance = 0;
+  double residual_floor = 0;
   std::string message; ///< for unstable runs: step, Δt and limit
 };
 
@@ -104,6 +112,14 @@ public:
   /// measurements start from a perturbed state).
   void perturb(const std::vector<double>& du);
   const Integrator& integrator() const { return *integrator_; }
+  /// The round-off floor of the residual force [N] this run can reach: kernel/round_off.hpp's
+  /// estimate at the initial positions times the integrator's round_off_amplification.
+  double residual_floor() const { return residual_floor_; }
+  /// The relative force tolerance the steady-state check uses at the full applied load:
+  /// solver.steady.force_tolerance, raised to round_off_margin × the round-off floor where that
+  /// is higher. A run without loads normalises by its reactions, known only at the check: there
+  /// this is the requested tolerance and RunResult::force_tolerance says what was used.
+  double steady_force_tolerance() const;
 
   /// Checkpoints (checkpoint.hpp): the State, the model's bond history (broken bonds, damage,
   /// plastic stretch), the step at which the run started (max_steps counts from it) and the
@@ -133,7 +149,21 @@ private:
   std::size_t run_origin_ = 0;
   bool resumed_ = false;
 
-  double relative_residual() const;
+  /// Out-of-balance force norm over the free dofs and the reference it is measured against [N].
+  struct ForceBalance {
+    double residual = 0;
+    double reference = 0;
+    double relative() const { return reference > 0 ? residual / reference : residual; }
+  };
+  ForceBalance force_balance() const;
+  /// The tolerance for a residual measured against `reference` [N] (see steady_force_tolerance).
+  double force_tolerance_for(double reference) const;
+  /// The residual, its tolerance and the floor of the current state into r.
+  void record_balance(RunResult& r) const;
+  /// ‖V b_ext‖ at the full load [N], 0 without loads.
+  double full_load_norm() const;
+
+  double residual_floor_ = 0;
 };
 
 } // namespace pd
