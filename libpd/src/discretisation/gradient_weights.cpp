@@ -396,6 +396,30 @@ double GradientWeights::weight(const Vec3& xi, double spacing) const {
   return total > 0 ? sum / total : 0.0;
 }
 
+double stiff_bond_reach(const CorrectionSpec& spec) {
+  if (spec.volume_correction != VolumeCorrection::gradient) {
+    return spec.lattice.horizon_factor;
+  }
+  double reach2 = 0;
+  for (const GradientWeights::Orbit& o : gradient_matched_weights(spec).orbits) {
+    if (o.weight > 0) {
+      reach2 = std::max(reach2,
+                        static_cast<double>(o.offset[0] * o.offset[0] + o.offset[1] * o.offset[1] +
+                                            o.offset[2] * o.offset[2]));
+    }
+  }
+  return std::min(std::sqrt(reach2), spec.lattice.horizon_factor);
+}
+
+GhostSiteReach ghost_site_reach(const CorrectionSpec& spec) {
+  GhostSiteReach r{spec.lattice, spec.horizon_rule};
+  r.lattice.horizon_factor = stiff_bond_reach(spec);
+  if (r.lattice.horizon_factor < spec.lattice.horizon_factor) {
+    r.rule = HorizonRule::inclusive;
+  }
+  return r;
+}
+
 double fracture_energy_weight_ratio(const CorrectionSpec& spec) {
   const double lambda = spec.lattice.spacing;
   const double delta = spec.lattice.horizon();

@@ -249,11 +249,12 @@ std::size_t Model::memory_bytes() const {
 
 namespace {
 
-/// Ghost particles at the lattice sites outside the bodies within the horizon (ghost_layers.hpp),
-/// appended after the body particles. Their material is set once the bond family is known.
+/// Ghost particles at the lattice sites outside the bodies within reach of a bond with stiffness
+/// (ghost_layers.hpp, stiff_bond_reach), appended after the body particles. Their material is set
+/// once the bond family is known.
 void append_ghost_sites(const ModelSpec& spec, ParticleSet& particles) {
-  const auto sites =
-      ghost_sites(spec.dimension.dim, spec.lattice, spec.horizon_rule, particles.position);
+  const GhostSiteReach reach = ghost_site_reach(spec.corrections());
+  const auto sites = ghost_sites(spec.dimension.dim, reach.lattice, reach.rule, particles.position);
   const double volume = cell_volume(spec.dimension, spec.lattice.spacing);
   for (const Vec3& p : sites) {
     particles.position.push_back(p);

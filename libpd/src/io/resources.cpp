@@ -1,5 +1,7 @@
 #include "libpd/io/resources.hpp"
 
+#include "libpd/discretisation/corrections.hpp"
+
 #include <algorithm>
 #include <cctype>
 #include <charconv>
@@ -259,10 +261,12 @@ ResourceEstimate estimate_resources(const ModelSpec& spec, const SolverSpec& sol
     all.boxes.insert(all.boxes.end(), b.region.boxes.begin(), b.region.boxes.end());
   }
   const double bodies = lattice_points_in_union(d, spec.lattice, all);
-  // Ghost sites (surface_correction ghost): the lattice sites within δ of the bodies.
-  const double ghosts = spec.surface_correction == SurfaceCorrection::ghost
-                            ? ghost_sites_around_union(d, spec.lattice, spec.horizon_rule, all)
-                            : 0.0;
+  // Ghost sites (surface_correction ghost): the lattice sites within reach of a stiff bond.
+  double ghosts = 0;
+  if (spec.surface_correction == SurfaceCorrection::ghost) {
+    const GhostSiteReach reach = ghost_site_reach(spec.corrections());
+    ghosts = ghost_sites_around_union(d, reach.lattice, reach.rule, all);
+  }
   const double n = bodies + ghosts;
   e.particles = n;
   // `gradient` weights leave only the offsets they weight in the family (model.cpp drops bonds

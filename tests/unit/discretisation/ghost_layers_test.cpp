@@ -1,6 +1,7 @@
 // Ghost layers and quadratically extrapolated clamps (issue 14, item 2): every quadratic field
 // costs each body particle exactly the energy of a bulk particle, a clamp reproduces every
 // quadratic field that vanishes on its face, and the constrained operator is symmetric.
+#include "libpd/discretisation/corrections.hpp"
 #include "libpd/discretisation/ghost_layers.hpp"
 #include "libpd/discretisation/model.hpp"
 #include "libpd/kernel/linear_operator.hpp"
@@ -38,6 +39,9 @@ pd::ModelSpec box_spec(int dim, pd::VolumeCorrection v, double horizon_factor) {
 double bulk_weight(const pd::ModelSpec& spec, const pd::Vec3& xi) {
   if (spec.volume_correction == pd::VolumeCorrection::moment) {
     return pd::moment_matched_weights(spec.corrections()).weight(xi);
+  }
+  if (spec.volume_correction == pd::VolumeCorrection::gradient) {
+    return pd::gradient_matched_weights(spec.corrections()).weight(xi, spec.lattice.spacing);
   }
   return 1.0;
 }
@@ -146,7 +150,28 @@ INSTANTIATE_TEST_SUITE_P(
     testing::Values(GhostCase{3, pd::VolumeCorrection::none, 3.0},
                     GhostCase{3, pd::VolumeCorrection::moment, 2.0 * std::sqrt(3.0)},
                     GhostCase{2, pd::VolumeCorrection::none, 3.015},
-                    GhostCase{2, pd::VolumeCorrection::moment, 2.0 * std::sqrt(3.0)}));
+                    GhostCase{2, pd::VolumeCorrection::moment, 2.0 * std::sqrt(3.0)},
+                    GhostCase{3, pd::VolumeCorrection::gradient, 2.0 * std::sqrt(3.0)},
+                    GhostCase{2, pd::VolumeCorrection::gradient, 2.0 * std::sqrt(3.0)}));
+
+TEST(GhostLayers, OnlySitesWithinReachOfAStiffBondBecomeGhosts) {
+  // Gradient weights at δ = 2√3 λ stop at 2λ: a site farther from the body would carry bonds of
+  // weight 0 only, costing extrapolation and memory for nothing. Each ghost keeps a bond, and
+  // the sites within 2λ are all there (the energy test above holds with them).
+  for (const int dim : {2, 3}) {
+    const pd::ModelSpec spec = box_spec(dim, pd::VolumeCorrection::gradient, 2 * std::sqrt(3.0));
+    EXPECT_DOUBLE_EQ(pd::stiff_bond_reach(spec.corrections()), 2.0);
+    const pd::Model m = pd::build_model(spec);
+    const std::size_t body = m.body_particle_count();
+    ASSERT_GT(m.ghost_count, 0u);
+    for (std::size_t g = body; g < m.size(); ++g) {
+      EXPECT_GT(m.family.offsets[g + 1], m.family.offsets[g]) << "ghost " << g << " has no bond";
+    }
+  }
+  // Other weights keep every bond up to δ, so the ghosts reach that far.
+  const pd::ModelSpec moment = box_spec(3, pd::VolumeCorrection::moment, 3.0);
+  EXPECT_DOUBLE_EQ(pd::stiff_bond_reach(moment.corrections()), 3.0);
+}
 
 TEST(GhostLayers, WithoutGhostsTheSurfaceParticlesMissEnergy) {
   // The reference the test above is sharp against: the same body without ghosts stores less.

@@ -199,6 +199,19 @@ struct GradientWeights {
 };
 GradientWeights gradient_matched_weights(const CorrectionSpec& spec);
 
+/// The longest bond that keeps a stiffness, in spacings: the outermost orbit with a non-zero
+/// weight under `gradient` weights (2 at δ = 2√3 λ), the horizon factor otherwise. Ghost sites
+/// beyond it would carry only bonds of zero weight, so none are made (model.cpp, resources.cpp).
+double stiff_bond_reach(const CorrectionSpec& spec);
+
+/// Where ghost sites are looked for: the lattice with its horizon shortened to stiff_bond_reach,
+/// and the rule that goes with it (inclusive where shortened: the reach is an offset's length).
+struct GhostSiteReach {
+  LatticeSpec lattice;
+  HorizonRule rule = HorizonRule::inclusive;
+};
+GhostSiteReach ghost_site_reach(const CorrectionSpec& spec);
+
 /// How much more energy the weighted bonds crossing a plane store than unweighted ones at the
 /// same stretch: Σ_{ξ_n > 0} w ξ_n |ξ| / Σ_{ξ_n > 0} ξ_n |ξ| over the bulk-lattice offsets, n the
 /// last active axis and w the bulk weight of spec.volume_correction (1 for `none`). The critical
