@@ -261,10 +261,16 @@ ResourceEstimate estimate_resources(const ModelSpec& spec, const SolverSpec& sol
     all.boxes.insert(all.boxes.end(), b.region.boxes.begin(), b.region.boxes.end());
   }
   const double bodies = lattice_points_in_union(d, spec.lattice, all);
+  // `gradient` weights are solved for here only where that is cheap (their orbit table grows as
+  // m³); beyond, the estimate keeps every offset within δ, which can only count too many.
+  const bool weights_solved = spec.volume_correction == VolumeCorrection::gradient &&
+                              spec.lattice.horizon_factor <= 40 &&
+                              spec.lattice.position_jitter == 0;
   // Ghost sites (surface_correction ghost): the lattice sites within reach of a stiff bond.
   double ghosts = 0;
   if (spec.surface_correction == SurfaceCorrection::ghost) {
-    const GhostSiteReach reach = ghost_site_reach(spec.corrections());
+    const GhostSiteReach reach = weights_solved ? ghost_site_reach(spec.corrections())
+                                                : GhostSiteReach{spec.lattice, spec.horizon_rule};
     ghosts = ghost_sites_around_union(d, reach.lattice, reach.rule, all);
   }
   const double n = bodies + ghosts;
@@ -272,8 +278,7 @@ ResourceEstimate estimate_resources(const ModelSpec& spec, const SolverSpec& sol
   // `gradient` weights leave only the offsets they weight in the family (model.cpp drops bonds
   // without stiffness); a ghost bonds only towards the body, about half a family.
   double family = bulk_family_size(d, spec.lattice, spec.horizon_rule);
-  if (spec.volume_correction == VolumeCorrection::gradient && spec.lattice.horizon_factor <= 40 &&
-      spec.lattice.position_jitter == 0) {
+  if (weights_solved) {
     double weighted = 0;
     for (const auto& o : gradient_matched_weights(spec.corrections()).orbits) {
       weighted += o.weight > 0 ? static_cast<double>(o.count) : 0.0;

@@ -1,8 +1,8 @@
 // Adaptive dynamic relaxation (Kilic & Madenci 2010, libpd/src/time/adr.cpp): the fictitious
 // density makes central differences with Δt = 1 stable (ω_max of Λ⁻¹K ≤ 2, checked with the Lanczos
 // estimate of libpd/time/stability.hpp), and ADR reaches the same static answer as damped Euler
-// under the same steady-state criterion. AdrSlow.* runs the clamped-beam acceptance case (≈ 20 s,
-// label it slow).
+// under the same steady-state criterion. AdrSlow.* runs the clamped-beam acceptance case against
+// the static solve (about 10 s).
 #include "libpd/app/run.hpp"
 #include "libpd/io/scene.hpp"
 #include "libpd/kernel/force_kernel.hpp"
@@ -127,25 +127,27 @@ TEST(Adr, ReachesTheDampedEulerSteadyState) {
   RecordProperty("adr_evaluations", std::to_string(evaluations[1]));
 }
 
-TEST(AdrSlow, ClampedBeamMatchesDampedEuler) {
-  // Acceptance: the clamped beam of Miranda §5.1.1 under its own steady-state criterion.
-  // The scene runs on the static solver; this test compares the two dynamic relaxations.
-  pd::Scene scene = pd::load_scene(std::string(PD_SCENES_DIR) + "/clamped-beam.yaml");
-  scene.solver.integrator = pd::IntegratorKind::damped_euler;
+TEST(AdrSlow, ClampedBeamMatchesTheStaticSolve) {
+  // Acceptance (issues 13 and 15): the clamped beam of Miranda §5.1.1 relaxed by ADR under its
+  // steady-state criterion against the static solver's equilibrium (residual 1e-10 of the load).
+  // Damped Euler is compared in `pd compare quasistatic`: with the ghosts' 3× smaller stable step
+  // it needed 250 s here, which the default test run cannot afford.
+  const pd::Scene scene = pd::load_scene(std::string(PD_SCENES_DIR) + "/clamped-beam.yaml");
+  ASSERT_EQ(scene.solver.integrator, pd::IntegratorKind::static_solve);
   pd::RunOptions opt;
   opt.stop_on_interrupt = false;
-  const pd::RunOutcome damped = pd::run_scene(scene, opt);
+  const pd::RunOutcome exact = pd::run_scene(scene, opt);
   pd::Scene adr_scene = scene;
   adr_scene.solver.integrator = pd::IntegratorKind::adr;
   const pd::RunOutcome adr = pd::run_scene(adr_scene, opt);
-  ASSERT_EQ(damped.result.status, pd::RunStatus::converged);
+  ASSERT_EQ(exact.result.status, pd::RunStatus::converged);
   ASSERT_EQ(adr.result.status, pd::RunStatus::converged);
-  const double w0 = damped.probes.at("midspan_deflection");
+  const double w0 = exact.probes.at("midspan_deflection");
   const double w1 = adr.probes.at("midspan_deflection");
-  // Both stop at residual ≤ force_tolerance = 1e-6 of the load: the deflections agree to a few
-  // times that (measured 1.5e-6).
-  EXPECT_NEAR(w1, w0, 1e-5 * std::abs(w0));
-  EXPECT_LT(adr.result.force_evaluations, damped.result.force_evaluations);
+  // ADR stops at residual ≤ 1e-6 of the load; issue 15 asks for the same deflection to 1e-6
+  // (measured 2.8e-7).
+  EXPECT_NEAR(w1, w0, 1e-6 * std::abs(w0));
+  EXPECT_GT(adr.result.force_evaluations, 100 * exact.result.force_evaluations);
 }
 
 } // namespace
