@@ -121,6 +121,10 @@ std::vector<Constraint> support_constraints(const ModelSpec& spec, const Particl
                                             std::size_t body_particles) {
   const double tol = region_tolerance(spec);
   std::vector<OwnedConstraint> constraints;
+  // Under quadratic coupling: which body particles the mirror supports extrapolate, and the
+  // support holding the most of them, to name if they are all of them.
+  std::vector<std::uint8_t> extrapolated(std::min(body_particles, particles.size()), 0);
+  std::size_t largest = 0, largest_count = 0;
   for (std::size_t s = 0; s < spec.supports.size(); ++s) {
     const SupportSpec& sup = spec.supports[s];
     const auto members =
@@ -129,6 +133,13 @@ std::vector<Constraint> support_constraints(const ModelSpec& spec, const Particl
       throw SupportError(s, "support '" + sup.name + "' holds no particle");
     }
     if (sup.mirrors() && spec.mirror_coupling == MirrorCoupling::quadratic) {
+      for (std::uint32_t i : members) {
+        extrapolated[i] = 1;
+      }
+      if (members.size() > largest_count) {
+        largest = s;
+        largest_count = members.size();
+      }
       continue; // its particles are extrapolated from the body (extrapolated_particles)
     }
     if (sup.mirrors()) {
@@ -142,6 +153,14 @@ std::vector<Constraint> support_constraints(const ModelSpec& spec, const Particl
         }
       }
     }
+  }
+  if (!extrapolated.empty() && std::all_of(extrapolated.begin(), extrapolated.end(),
+                                           [](std::uint8_t e) { return e != 0; })) {
+    // Nothing would be left to move or to extrapolate from: every bond would join two
+    // extrapolated particles and carry no stiffness.
+    throw SupportError(largest, "support '" + spec.supports[largest].name +
+                                    "': with the other mirror supports it holds every particle "
+                                    "of the bodies, so none is left free to move");
   }
   // Later supports override earlier ones on the same component.
   std::stable_sort(constraints.begin(), constraints.end(),

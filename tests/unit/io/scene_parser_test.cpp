@@ -1178,6 +1178,14 @@ TEST(SceneParser, MirrorImageOutsideTheBody) {
                        17, 13, "support 's': no particle at the mirror image (1.85, 0, 0)"));
 }
 
+TEST(SceneParser, MirrorSupportsHoldingTheWholeBody) {
+  // Under the default quadratic coupling a mirror support's particles are extrapolated from the
+  // free ones; a box over the whole bar leaves none (it used to end in an internal error).
+  EXPECT_TRUE(fails_at(yaml(minimal) + "supports:\n  - name: s\n    box: [[0], [1]]\n"
+                                       "    mirror: {x: 1}\n",
+                       17, 13, "support 's': with the other mirror supports it holds every"));
+}
+
 TEST(SceneParser, MirrorImageHeldByAnotherSupport) {
   EXPECT_TRUE(fails_at(yaml(minimal) + "supports:\n  - name: m\n    box: [[0], [0.3]]\n"
                                        "    mirror: {x: 0.3}\n"
