@@ -93,8 +93,10 @@ struct ModelSpec {
   EffectSet effects;
   SurfaceCorrection surface_correction = SurfaceCorrection::none;
   VolumeCorrection volume_correction = VolumeCorrection::none;
-  /// `copy` stays the default only until issue 14's default surface treatment lands: the shipped
-  /// structural scenes' correction pairs were calibrated against it.
+  /// A spec built in C++ is the bare model (no corrections, `copy` coupling); scene files take the
+  /// library's defaults instead (ghost + gradient + quadratic, io/scene/model_options.cpp). That
+  /// these differ is a known wart (issue 14 note): moving the C++ defaults touches every test
+  /// that builds a spec by hand.
   MirrorCoupling mirror_coupling = MirrorCoupling::copy;
 
   /// What the bond corrections read of the model (corrections.hpp).
