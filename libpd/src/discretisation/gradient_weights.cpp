@@ -396,28 +396,44 @@ double GradientWeights::weight(const Vec3& xi, double spacing) const {
   return total > 0 ? sum / total : 0.0;
 }
 
-double stiff_bond_reach(const CorrectionSpec& spec) {
-  if (spec.volume_correction != VolumeCorrection::gradient) {
-    return spec.lattice.horizon_factor;
-  }
+double GradientWeights::reach() const {
   double reach2 = 0;
-  for (const GradientWeights::Orbit& o : gradient_matched_weights(spec).orbits) {
+  for (const Orbit& o : orbits) {
     if (o.weight > 0) {
       reach2 = std::max(reach2,
                         static_cast<double>(o.offset[0] * o.offset[0] + o.offset[1] * o.offset[1] +
                                             o.offset[2] * o.offset[2]));
     }
   }
-  return std::min(std::sqrt(reach2), spec.lattice.horizon_factor);
+  return std::sqrt(reach2);
 }
 
-GhostSiteReach ghost_site_reach(const CorrectionSpec& spec) {
+double stiff_bond_reach(const CorrectionSpec& spec) {
+  if (spec.volume_correction != VolumeCorrection::gradient) {
+    return spec.lattice.horizon_factor;
+  }
+  return std::min(gradient_matched_weights(spec).reach(), spec.lattice.horizon_factor);
+}
+
+namespace {
+
+GhostSiteReach shortened_to(const CorrectionSpec& spec, double reach) {
   GhostSiteReach r{spec.lattice, spec.horizon_rule};
-  r.lattice.horizon_factor = stiff_bond_reach(spec);
-  if (r.lattice.horizon_factor < spec.lattice.horizon_factor) {
+  r.lattice.horizon_factor = reach;
+  if (reach < spec.lattice.horizon_factor) {
     r.rule = HorizonRule::inclusive;
   }
   return r;
+}
+
+} // namespace
+
+GhostSiteReach ghost_site_reach(const CorrectionSpec& spec) {
+  return shortened_to(spec, stiff_bond_reach(spec));
+}
+
+GhostSiteReach ghost_site_reach(const CorrectionSpec& spec, const GradientWeights& weights) {
+  return shortened_to(spec, std::min(weights.reach(), spec.lattice.horizon_factor));
 }
 
 double fracture_energy_weight_ratio(const CorrectionSpec& spec) {

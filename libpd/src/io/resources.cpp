@@ -12,6 +12,7 @@
 #include <fstream>
 #include <limits>
 #include <numbers>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -262,15 +263,18 @@ ResourceEstimate estimate_resources(const ModelSpec& spec, const SolverSpec& sol
   }
   const double bodies = lattice_points_in_union(d, spec.lattice, all);
   // `gradient` weights are solved for here only where that is cheap (their orbit table grows as
-  // m³); beyond, the estimate keeps every offset within δ, which can only count too many.
-  const bool weights_solved = spec.volume_correction == VolumeCorrection::gradient &&
-                              spec.lattice.horizon_factor <= 40 &&
-                              spec.lattice.position_jitter == 0;
+  // m³: 8 s at m = 40); beyond, the estimate keeps every offset within δ, which can only count too
+  // many. Solved once, for both the ghosts' reach and the family.
+  std::optional<GradientWeights> weights;
+  if (spec.volume_correction == VolumeCorrection::gradient && spec.lattice.horizon_factor <= 40 &&
+      spec.lattice.position_jitter == 0) {
+    weights = gradient_matched_weights(spec.corrections());
+  }
   // Ghost sites (surface_correction ghost): the lattice sites within reach of a stiff bond.
   double ghosts = 0;
   if (spec.surface_correction == SurfaceCorrection::ghost) {
-    const GhostSiteReach reach = weights_solved ? ghost_site_reach(spec.corrections())
-                                                : GhostSiteReach{spec.lattice, spec.horizon_rule};
+    const GhostSiteReach reach = weights ? ghost_site_reach(spec.corrections(), *weights)
+                                         : GhostSiteReach{spec.lattice, spec.horizon_rule};
     ghosts = ghost_sites_around_union(d, reach.lattice, reach.rule, all);
   }
   const double n = bodies + ghosts;
@@ -278,9 +282,9 @@ ResourceEstimate estimate_resources(const ModelSpec& spec, const SolverSpec& sol
   // `gradient` weights leave only the offsets they weight in the family (model.cpp drops bonds
   // without stiffness); a ghost bonds only towards the body, about half a family.
   double family = bulk_family_size(d, spec.lattice, spec.horizon_rule);
-  if (weights_solved) {
+  if (weights) {
     double weighted = 0;
-    for (const auto& o : gradient_matched_weights(spec.corrections()).orbits) {
+    for (const auto& o : weights->orbits) {
       weighted += o.weight > 0 ? static_cast<double>(o.count) : 0.0;
     }
     family = std::min(family, weighted);

@@ -196,6 +196,8 @@ struct GradientWeights {
   /// the table (jittered particles near the horizon) takes the count-weighted mean weight of the
   /// shell of orbits whose |o| is nearest to |ξ|/λ (the outermost shell: weight 0 in 3D so far).
   double weight(const Vec3& xi, double spacing) const;
+  /// Length of the longest offset with a non-zero weight, in spacings.
+  double reach() const;
 };
 GradientWeights gradient_matched_weights(const CorrectionSpec& spec);
 
@@ -211,6 +213,8 @@ struct GhostSiteReach {
   HorizonRule rule = HorizonRule::inclusive;
 };
 GhostSiteReach ghost_site_reach(const CorrectionSpec& spec);
+/// The same with the weights already solved (they cost seconds at large horizons).
+GhostSiteReach ghost_site_reach(const CorrectionSpec& spec, const GradientWeights& weights);
 
 /// How much more energy the weighted bonds crossing a plane store than unweighted ones at the
 /// same stretch: Σ_{ξ_n > 0} w ξ_n |ξ| / Σ_{ξ_n > 0} ξ_n |ξ| over the bulk-lattice offsets, n the
