@@ -150,7 +150,9 @@ std::unique_ptr<ForceEvaluator> make_force_evaluator(Model& m, KernelPath path) 
     throw std::logic_error(
         "plasticity effect without bond state: build the model with build_model");
   }
-  if (m.effects.per_bond_field && !m.field.per_bond()) {
+  // Sized, not merely non-empty: a model whose bonds all lost their stiffness (a lone particle)
+  // has a per-bond field of zero entries, which is allocated.
+  if (m.effects.per_bond_field && m.field.bond_stiffness.size() != m.family.directed_bond_count()) {
     throw std::logic_error("per-bond field requested but not allocated");
   }
   // The SIMD kernel gathers with 32-bit signed indices.

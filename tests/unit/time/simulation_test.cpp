@@ -2,9 +2,9 @@
 // the static solution of the linear spring chain, instability detection, reproducibility, load
 // ramps and prescribed displacements.
 #include "libpd/kernel/force_kernel.hpp"
+#include "libpd/kernel/stable_time_step.hpp"
 #include "libpd/time/integrator.hpp"
 #include "libpd/time/simulation.hpp"
-#include "libpd/kernel/stable_time_step.hpp"
 
 #include <gtest/gtest.h>
 
@@ -302,6 +302,27 @@ TEST(Simulation, PrescribedDisplacementsAreHonouredAndReachEquilibrium) {
     EXPECT_NEAR(sim.displacement(i, 0), u[i], 1e-4 * d) << i;
   }
   EXPECT_NEAR(r.strain_energy, quadratic_energy(k, u), 1e-3 * quadratic_energy(k, u));
+}
+
+TEST(Simulation, AModelWithoutStiffBondsIsAClearErrorNotAnInternalOne) {
+  // One particle under gradient weights: its per-bond field has zero entries, which is allocated
+  // (the kernel used to call it "requested but not allocated"); the run then says why it cannot
+  // step.
+  pd::ModelSpec spec = bar(1);
+  spec.volume_correction = pd::VolumeCorrection::gradient;
+  pd::Model model = pd::build_model(spec);
+  ASSERT_EQ(model.family.directed_bond_count(), 0u);
+  ASSERT_TRUE(model.effects.per_bond_field);
+  EXPECT_NO_THROW((void)pd::make_force_evaluator(model));
+  std::string message;
+  try {
+    pd::SolverSpec solver;
+    solver.end_time = 1e-3;
+    pd::Simulation sim(model, solver);
+  } catch (const std::exception& e) {
+    message = e.what();
+  }
+  EXPECT_NE(message.find("does the model have bonds?"), std::string::npos) << message;
 }
 
 TEST(Simulation, OversizedTimeStepIsReportedAsUnstable) {
