@@ -225,6 +225,8 @@ private:
       return !interrupt.requested() && !failure_seen(s);
     });
     progress.clear();
+    out_.stop_peak = stop_peak_;
+    out_.stop_peak_time = stop_peak_time_;
     if (!failure_.empty()) {
       out_.result.status = RunStatus::failed;
       out_.result.message = failure_;

@@ -79,6 +79,12 @@ Json run_summary(const Scene& scene, const Simulation& sim, const RunOutcome& ou
           load_particles(model.spec, model.particles, load, model.body_particle_count()).size();
     }
   }
+  if (scene.stop_when.enabled()) {
+    Json& sj = j["stop_when"];
+    sj["probe"] = scene.stop_when.probe;
+    sj["peak"] = out.stop_peak; // the failure value when status is `failed`
+    sj["peak_time"] = out.stop_peak_time;
+  }
   Json& pj = j["probes"];
   pj = Json::object();
   for (const auto& [name, value] : out.probes) {
