@@ -357,3 +357,19 @@ supports:
 }
 
 } // namespace
+
+namespace {
+
+TEST(SceneGeometry, BoxOffTheCellFacesWarnsWithTheRepresentedVolume) {
+  std::string text = plate(solver);
+  text.replace(text.find("[[0, 0], [0.2, 0.1]]"), 20, "[[0, 0], [0.205, 0.1]]");
+  const pd::Scene s = pd::parse_scene(text, "s.yaml");
+  ASSERT_EQ(s.warnings.size(), 1u);
+  // 21 columns of cells (the centre at x = 0.205 lies on the face) for a 0.205 m box.
+  EXPECT_NE(s.warnings[0].find("s.yaml:13:10: warning: a box of body 'plate' has faces between"),
+            std::string::npos)
+      << s.warnings[0];
+  EXPECT_NE(s.warnings[0].find("(+2.44 %)"), std::string::npos) << s.warnings[0];
+}
+
+} // namespace

@@ -266,9 +266,136 @@ void check_shaped_bodies(const Reader& r, const ModelSpec& model, const Marks& m
   }
 }
 
+/// Volume of a shaped body's region, by sampling each covering box on a grid 4 times finer than
+/// the lattice (nullopt if that would take more than 2·10^7 samples).
+std::optional<double> sampled_volume(const ModelSpec& model, const Region& region) {
+  const int dim = model.dimension.dim;
+  const double step = 0.25 * model.lattice.spacing;
+  double samples = 0;
+  const std::vector<Box> cover = region.cover(dim);
+  for (const Box& b : cover) {
+    double n = 1;
+    for (int a = 0; a < dim; ++a) {
+      n *= std::ceil((b.hi[a] - b.lo[a]) / step);
+    }
+    samples += n;
+  }
+  if (samples > 2e7 || cover.size() != 1) {
+    return std::nullopt; // several covering boxes would count their overlaps twice
+  }
+  const Box& b = cover.front();
+  std::array<long long, 3> n{1, 1, 1};
+  for (int a = 0; a < dim; ++a) {
+    n[a] = static_cast<long long>(std::ceil((b.hi[a] - b.lo[a]) / step));
+  }
+  long long inside = 0;
+  for (long long k = 0; k < n[2]; ++k) {
+    for (long long j = 0; j < n[1]; ++j) {
+      for (long long i = 0; i < n[0]; ++i) {
+        const std::array<long long, 3> idx{i, j, k};
+        Vec3 p = b.lo;
+        for (int a = 0; a < dim; ++a) {
+          const double h = (b.hi[a] - b.lo[a]) / static_cast<double>(n[a]);
+          p[a] = b.lo[a] + (static_cast<double>(idx[a]) + 0.5) * h;
+        }
+        inside += region.contains(p, dim, 0.0) ? 1 : 0;
+      }
+    }
+  }
+  double cell = cell_volume(model.dimension, 1.0);
+  for (int a = 0; a < dim; ++a) {
+    cell *= (b.hi[a] - b.lo[a]) / static_cast<double>(n[a]);
+  }
+  return static_cast<double>(inside) * cell;
+}
+
+/// Whether a box lies in the mirror supports' regions (its corners and centre do): a clamp's own
+/// box behind a mirror plane, not part of the continuum body.
+bool behind_mirror_planes(const ModelSpec& model, const Box& b) {
+  const int dim = model.dimension.dim;
+  Region clamps;
+  for (const SupportSpec& sup : model.supports) {
+    if (sup.mirrors()) {
+      clamps.boxes.insert(clamps.boxes.end(), sup.region.boxes.begin(), sup.region.boxes.end());
+    }
+  }
+  Vec3 centre{};
+  for (std::size_t a = 0; a < 3; ++a) {
+    centre[a] = 0.5 * (b.lo[a] + b.hi[a]);
+  }
+  bool inside = clamps.contains(centre, dim, 1e-9);
+  for (int corner = 0; inside && corner < (1 << dim); ++corner) {
+    Vec3 p = b.lo;
+    for (int a = 0; a < dim; ++a) {
+      p[static_cast<std::size_t>(a)] = ((corner >> a) & 1) != 0 ? b.hi[static_cast<std::size_t>(a)]
+                                                                : b.lo[static_cast<std::size_t>(a)];
+    }
+    inside = clamps.contains(p, dim, 1e-9);
+  }
+  return inside;
+}
+
+/// A body the lattice cannot fill exactly says what it represents: a box whose faces are not on
+/// the cell faces of the (cell-centred) lattice, or a shaped body, whose particles' volume
+/// differs from the shape's.
+void warn_represented_volume(Reader& r, const ModelSpec& model, const Marks& marks,
+                             const ParticleSet* particles) {
+  const LatticeSpec& lattice = model.lattice;
+  const ModelDimension& d = model.dimension;
+  const double cell = cell_volume(d, lattice.spacing);
+  const double unit = cell_volume(d, 1.0); // thickness (2D) or cross-section (1D)
+  for (std::size_t i = 0; i < model.bodies.size(); ++i) {
+    const BodySpec& body = model.bodies[i];
+    if (body.region.only_boxes()) {
+      if (lattice.convention != LatticeConvention::cell_centered) {
+        continue; // node-based particles never tile their box
+      }
+      for (std::size_t k = 0; k < body.region.boxes.size(); ++k) {
+        const Box& b = body.region.boxes[k];
+        double volume = unit;
+        bool aligned = true;
+        for (int a = 0; a < d.dim; ++a) {
+          volume *= b.hi[a] - b.lo[a];
+          for (double x : {b.lo[a], b.hi[a]}) {
+            const double cells = (x - lattice.origin[a]) / lattice.spacing;
+            aligned = aligned && std::abs(cells - std::round(cells)) < 1e-6;
+          }
+        }
+        if (aligned || behind_mirror_planes(model, b)) {
+          continue;
+        }
+        const double represented = lattice_points_in_box(d, lattice, b) * cell;
+        r.warn(marks.body_box_nodes[i].at(k),
+               fmt::format("a box of body '{}' has faces between the lattice's cell faces "
+                           "(spacing {} m): its particles represent {:.6g} of its {:.6g} {} "
+                           "({:+.2f} %)",
+                           body.name, format_number(lattice.spacing), represented, volume,
+                           d.dim == 3 ? "m³" : "m³ (with the thickness)",
+                           100 * (represented / volume - 1)));
+      }
+      continue;
+    }
+    if (particles == nullptr) {
+      continue;
+    }
+    const auto count = static_cast<double>(
+        std::count(particles->body.begin(), particles->body.end(), static_cast<std::uint16_t>(i)));
+    const auto volume = sampled_volume(model, body.region);
+    if (volume && std::abs(count * cell / *volume - 1) > 1e-6) {
+      const double represented = count * cell;
+      r.warn(marks.body_nodes[i],
+             fmt::format("body '{}' is shaped: its {:.0f} particles represent {:.6g} of its "
+                         "{:.6g} {} ({:+.2f} %; the lattice does not follow a curved surface)",
+                         body.name, count, represented, *volume,
+                         d.dim == 3 ? "m³" : "m³ (with the thickness)",
+                         100 * (represented / *volume - 1)));
+    }
+  }
+}
+
 } // namespace
 
-std::optional<ParticleSet> check_against_lattice(const Reader& r, const Scene& scene,
+std::optional<ParticleSet> check_against_lattice(Reader& r, const Scene& scene,
                                                  const Marks& marks) {
   const ModelSpec& model = scene.model;
   // Resources first: before anything is enumerated or allocated.
@@ -285,12 +412,14 @@ std::optional<ParticleSet> check_against_lattice(const Reader& r, const Scene& s
                                   [](const BodySpec& b) { return !b.region.only_boxes(); });
   if (!shaped && std::none_of(model.supports.begin(), model.supports.end(),
                               [](const SupportSpec& s) { return s.mirrors(); })) {
+    warn_represented_volume(r, model, marks, nullptr);
     return std::nullopt;
   }
   ParticleSet particles = generate_lattice(model.dimension, model.lattice, model.bodies);
   if (shaped) {
     check_shaped_bodies(r, model, marks, particles);
   }
+  warn_represented_volume(r, model, marks, &particles);
   try {
     support_constraints(model, particles);
   } catch (const SupportError& e) {

@@ -109,8 +109,7 @@ void check_unique(const Reader& r, std::map<std::string, YAML::Node>& seen, cons
 void check_consistency(Reader& r, const Scene& scene, const Marks& marks);
 /// Checks against the lattice, from the estimate of its size first, then by counting lattice
 /// points in regions, last (mirror supports) by generating it: the particles, if generated.
-std::optional<ParticleSet> check_against_lattice(const Reader& r, const Scene& scene,
-                                                 const Marks& marks);
+std::optional<ParticleSet> check_against_lattice(Reader& r, const Scene& scene, const Marks& marks);
 
 /// The whole scene, section by section, then the checks between sections.
 Scene read_scene(const YAML::Node& root, Reader& r);
