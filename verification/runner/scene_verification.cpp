@@ -125,7 +125,8 @@ Json verify_scene(const std::filesystem::path& scene_path, const Context& ctx,
     const double estimate = row_fe["error_estimate"] && !row_fe["error_estimate"].IsNull()
                                 ? row_fe["error_estimate"].as<double>()
                                 : std::nan("");
-    const double relative = (v_pd - v_fe) / std::abs(v_fe);
+    // Relative to the FE value itself: + means PD is larger in magnitude, whatever the sign.
+    const double relative = (v_pd - v_fe) / v_fe;
     worst = std::max(worst, std::abs(relative));
     row["pd"] = v_pd;
     row["fe"] = v_fe;
