@@ -170,7 +170,8 @@ ExtrapolatedParticles extrapolation_ties(int dim, double spacing, const std::vec
                                          const BondFamily& family,
                                          const std::vector<std::uint8_t>& dependent,
                                          const std::vector<std::uint32_t>& fitted,
-                                         const std::vector<ClampPlane>& planes) {
+                                         const std::vector<ClampPlane>& planes,
+                                         const std::vector<SymmetryPlane>& symmetry) {
   ExtrapolatedParticles ties;
   const double tolerance = 1e-6 * spacing;
   const double fit_radius = std::sqrt(6.0) * spacing;
@@ -226,15 +227,66 @@ ExtrapolatedParticles extrapolation_ties(int dim, double spacing, const std::vec
       }
     }
     std::sort(sources.begin(), sources.end());
-    const Basis basis(dim, spacing, p, behind, position, sources);
-    const std::vector<double> a = fit_weights(basis, p, position, sources);
-    for (std::size_t s = 0; s < sources.size(); ++s) {
-      if (a[s] != 0.0) {
-        ties.source.push_back(sources[s]);
-        ties.coefficient.push_back(a[s]);
+    if (symmetry.empty()) {
+      const Basis basis(dim, spacing, p, behind, position, sources);
+      const std::vector<double> a = fit_weights(basis, p, position, sources);
+      for (std::size_t s = 0; s < sources.size(); ++s) {
+        if (a[s] != 0.0) {
+          ties.source.push_back(sources[s]);
+          ties.coefficient.push_back(a[s]);
+          ties.negated.push_back(0);
+        }
+      }
+      ties.offsets.push_back(ties.source.size());
+      continue;
+    }
+    // The data: the sources, and their images across the symmetry planes (and across two of them,
+    // a corner) that lie within the fit radius of the nearest source.
+    std::vector<Vec3> data_position;
+    std::vector<std::uint32_t> data_source;
+    std::vector<std::uint8_t> data_negated;
+    for (const std::uint32_t s : sources) {
+      for (unsigned mask = 0; mask < (1U << symmetry.size()); ++mask) {
+        Vec3 x = position[s];
+        std::uint8_t negated = 0;
+        bool distinct = true;
+        for (std::size_t k = 0; k < symmetry.size(); ++k) {
+          if (((mask >> k) & 1U) != 0) {
+            const auto axis = static_cast<std::size_t>(symmetry[k].axis);
+            distinct = distinct && std::abs(x[axis] - symmetry[k].at) > tolerance;
+            x[axis] = 2 * symmetry[k].at - x[axis];
+            negated = static_cast<std::uint8_t>(negated ^ (1U << axis));
+          }
+        }
+        double d2 = 0;
+        for (std::size_t a = 0; a < 3; ++a) {
+          d2 += (x[a] - position[nearest][a]) * (x[a] - position[nearest][a]);
+        }
+        if (mask == 0 || (distinct && d2 <= fit_radius * fit_radius * (1 + 1e-9))) {
+          data_position.push_back(x);
+          data_source.push_back(s);
+          data_negated.push_back(negated);
+        }
+      }
+    }
+    std::vector<std::uint32_t> data(data_position.size());
+    for (std::size_t k = 0; k < data.size(); ++k) {
+      data[k] = static_cast<std::uint32_t>(k);
+    }
+    const Basis basis(dim, spacing, p, behind, data_position, data);
+    const std::vector<double> a = fit_weights(basis, p, data_position, data);
+    for (std::size_t k = 0; k < data.size(); ++k) {
+      if (a[k] != 0.0) {
+        ties.source.push_back(data_source[k]);
+        ties.coefficient.push_back(a[k]);
+        ties.negated.push_back(data_negated[k]);
       }
     }
     ties.offsets.push_back(ties.source.size());
+  }
+  if (std::all_of(ties.negated.begin(), ties.negated.end(),
+                  [](std::uint8_t n) { return n == 0; })) {
+    ties.negated.clear();
   }
   return ties;
 }

@@ -316,6 +316,25 @@ void take_material_of_nearest_body_particle(const BondFamily& family, std::size_
   }
 }
 
+/// The symmetry planes of spec's supports, each with the side the body lies on (that of the mean
+/// body particle).
+std::vector<SymmetryPlane> symmetry_planes(const ModelSpec& spec, const ParticleSet& particles,
+                                           std::size_t body_count) {
+  std::vector<SymmetryPlane> planes;
+  for (const SupportSpec& sup : spec.supports) {
+    for (std::size_t a = 0; a < 3; ++a) {
+      if (sup.symmetry[a]) {
+        double mean = 0;
+        for (std::size_t i = 0; i < body_count; ++i) {
+          mean += particles.position[i][a] - sup.symmetry_at[a];
+        }
+        planes.push_back({static_cast<int>(a), sup.symmetry_at[a], mean >= 0 ? 1.0 : -1.0});
+      }
+    }
+  }
+  return planes;
+}
+
 /// Symmetry supports: every ghost site beyond a symmetry plane (beyond several: across all of
 /// them) takes the displacement of its image with the normal components negated, instead of the
 /// quadratic fit: the image if it is a body particle, the image's own terms if it is a ghost.
@@ -332,14 +351,13 @@ ExtrapolatedParticles symmetry_images(const ModelSpec& spec, const ParticleSet& 
   std::vector<Plane> planes;
   const int dim = spec.dimension.dim;
   const double tol = region_tolerance(spec);
+  // The sides once (they read every body particle), then each plane with its support's region.
+  const std::vector<SymmetryPlane> sides = symmetry_planes(spec, particles, body_count);
+  std::size_t next = 0;
   for (const SupportSpec& sup : spec.supports) {
     for (std::size_t a = 0; a < 3; ++a) {
       if (sup.symmetry[a]) {
-        double mean = 0;
-        for (std::size_t i = 0; i < body_count; ++i) {
-          mean += particles.position[i][a] - sup.symmetry_at[a];
-        }
-        planes.push_back({a, sup.symmetry_at[a], mean >= 0 ? 1.0 : -1.0, sup.region});
+        planes.push_back({a, sup.symmetry_at[a], sides[next++].side, sup.region});
       }
     }
   }
@@ -379,8 +397,8 @@ ExtrapolatedParticles symmetry_images(const ModelSpec& spec, const ParticleSet& 
       out.particle.push_back(p);
       out.source.push_back(found->second);
       out.coefficient.push_back(1.0);
-      out.offsets.push_back(out.source.size());
       out.negated.push_back(negated);
+      out.offsets.push_back(out.source.size());
       continue;
     }
     if (found != index.end() && slot[found->second] >= 0) {
@@ -392,9 +410,10 @@ ExtrapolatedParticles symmetry_images(const ModelSpec& spec, const ParticleSet& 
     for (std::size_t t = fitted.offsets[from]; t < fitted.offsets[from + 1]; ++t) {
       out.source.push_back(fitted.source[t]);
       out.coefficient.push_back(fitted.coefficient[t]);
+      const std::uint8_t own = fitted.negated.empty() ? 0 : fitted.negated[t];
+      out.negated.push_back(static_cast<std::uint8_t>(own ^ negated));
     }
     out.offsets.push_back(out.source.size());
-    out.negated.push_back(negated);
   }
   if (std::all_of(out.negated.begin(), out.negated.end(), [](std::uint8_t n) { return n == 0; })) {
     out.negated.clear();
@@ -441,7 +460,8 @@ ExtrapolatedParticles extrapolated_particles(const ModelSpec& spec, const Partic
   return symmetry_images(spec, particles, body_count,
                          extrapolation_ties(spec.dimension.dim, spec.lattice.spacing,
                                             particles.position, family, dependent, fitted,
-                                            clamp_planes(spec)));
+                                            clamp_planes(spec),
+                                            symmetry_planes(spec, particles, body_count)));
 }
 
 /// The loads as force densities [N/m³] per dof (empty without loads): a resultant is shared in

@@ -77,7 +77,7 @@ void fold(const Model& model, double* v, Sign sign) {
       const std::size_t s = e.source[t];
       const double a = sign(e.coefficient[t]) * volume[p] / volume[s];
       for (std::size_t c = 0; c < 3; ++c) {
-        v[3 * s + c] += sign(e.sign(d, c)) * a * v[3 * p + c];
+        v[3 * s + c] += sign(e.sign(t, c)) * a * v[3 * p + c];
       }
     }
   }
@@ -100,11 +100,11 @@ void set_extrapolated(const Model& model, double* v) {
     double acc[3] = {0, 0, 0};
     for (std::size_t t = e.offsets[d]; t < e.offsets[d + 1]; ++t) {
       for (std::size_t c = 0; c < 3; ++c) {
-        acc[c] += e.coefficient[t] * v[3 * e.source[t] + c];
+        acc[c] += e.sign(t, c) * e.coefficient[t] * v[3 * e.source[t] + c];
       }
     }
     for (std::size_t c = 0; c < 3; ++c) {
-      v[3 * p + c] = e.sign(d, c) * acc[c];
+      v[3 * p + c] = acc[c];
     }
   }
 }

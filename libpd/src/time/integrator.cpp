@@ -90,16 +90,17 @@ void apply_constraints(const Model& model, const LoadRamp& ramp, double t, doubl
     for (std::size_t term = e.offsets[d]; term < e.offsets[d + 1]; ++term) {
       const std::size_t s = e.source[term];
       for (std::size_t c = 0; c < 3; ++c) {
-        du[c] += e.coefficient[term] * (position[3 * s + c] - x[s][c]);
+        const double a = e.sign(term, c) * e.coefficient[term];
+        du[c] += a * (position[3 * s + c] - x[s][c]);
         if (velocity != nullptr) {
-          dv[c] += e.coefficient[term] * velocity[3 * s + c];
+          dv[c] += a * velocity[3 * s + c];
         }
       }
     }
     for (std::size_t c = 0; c < 3; ++c) {
-      position[3 * p + c] = x[p][c] + e.sign(d, c) * du[c];
+      position[3 * p + c] = x[p][c] + du[c];
       if (velocity != nullptr) {
-        velocity[3 * p + c] = e.sign(d, c) * dv[c];
+        velocity[3 * p + c] = dv[c];
       }
     }
   }

@@ -55,6 +55,15 @@ struct ClampPlane {
   }
 };
 
+/// A symmetry plane x_axis = at of a half model (SupportSpec::symmetry): the body lies on the side
+/// sign(x_axis − at) = side, and the field beyond it is the body's mirror image with the normal
+/// component negated.
+struct SymmetryPlane {
+  int axis = 0;
+  double at = 0;
+  double side = 1;
+};
+
 /// The lattice sites that are not particles of `body` but lie within the horizon of one of them:
 /// where ghost particles go. A particle's own site is its position rounded to the lattice, so
 /// jittered particle sets keep their ghosts on the regular lattice. Deterministic order (sorted
@@ -69,11 +78,15 @@ std::vector<Vec3> ghost_sites(int dim, const LatticeSpec& lattice, HorizonRule r
 /// dependant lies behind (see above). A dependant with no source within the horizon, or behind
 /// three planes, gets no term (its displacement stays zero). Axes along which the sources do not
 /// vary enough for a linear (two positions) or quadratic (three) term drop those terms, so thin
-/// bodies extrapolate with what they can resolve.
+/// bodies extrapolate with what they can resolve. Beside a symmetry plane the fit also takes the
+/// sources' mirror images within √6 λ of the nearest source as data (each a term of its source
+/// with the normal component negated), so that a ghost beside the plane is fitted from both sides
+/// as in the full model.
 ExtrapolatedParticles extrapolation_ties(int dim, double spacing, const std::vector<Vec3>& position,
                                          const BondFamily& family,
                                          const std::vector<std::uint8_t>& dependent,
                                          const std::vector<std::uint32_t>& fitted,
-                                         const std::vector<ClampPlane>& planes);
+                                         const std::vector<ClampPlane>& planes,
+                                         const std::vector<SymmetryPlane>& symmetry = {});
 
 } // namespace pd
