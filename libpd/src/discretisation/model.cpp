@@ -232,7 +232,9 @@ EffectSet kernel_effects(const ModelSpec& spec, std::size_t materials_used) {
   const bool weighted_mirrors = spec.mirror_coupling != MirrorCoupling::copy &&
                                 std::any_of(spec.supports.begin(), spec.supports.end(),
                                             [](const SupportSpec& s) { return s.mirrors(); });
-  effects.per_bond_field = materials_used > 1 || spec.corrections().corrects() ||
+  // The fibre model's field is the bound of fibre_stiffness_bound, one value per bond.
+  effects.per_bond_field = spec.effects.bond_model == BondModel::virtual_fibres ||
+                           materials_used > 1 || spec.corrections().corrects() ||
                            spec.lattice.volume_variation > 0 || weighted_mirrors;
   effects.body_force = std::any_of(spec.loads.begin(), spec.loads.end(), [](const LoadSpec& l) {
     return l.load.kind == BoxRegionLoad::Kind::body;
@@ -256,6 +258,10 @@ ModelStorage model_storage(const ModelSpec& spec, const EffectSet& effects) {
   }
   s.per_directed_bond += (effects.damage ? sizeof(std::uint8_t) : 0) +
                          (effects.plasticity ? dbl : 0); // broken flags, plastic stretch
+  if (effects.bond_model == BondModel::virtual_fibres) {
+    s.per_directed_bond += 3 * dbl; // the arm weights A, B (fibre_arms.hpp), the kernel's A|ξ|/N
+    s.per_particle += 3 * dbl;      // two moduli, and the kernel's mean strain
+  }
   return s;
 }
 
@@ -409,6 +415,27 @@ void drop_bonds_without_stiffness(BondFamily& family, std::vector<double>& facto
   factor = std::move(kept_factor);
 }
 
+/// The virtual-fibre model's arms (fibre_arms.hpp) and, as its per-bond field, the pair
+/// stiffness that bounds its operator (for the time step and ADR). Arms between two extrapolated
+/// particles carry nothing and leave the family, as for the bond-based model.
+void build_fibre_field(Model& m) {
+  std::vector<std::uint8_t> owns(m.size(), 1);
+  for (const std::uint32_t d : m.extrapolated.particle) {
+    owns[d] = 0;
+  }
+  std::vector<double> keep(m.family.directed_bond_count(), 0.0);
+  for (std::size_t i = 0; i < m.size(); ++i) {
+    for (std::size_t k = m.family.offsets[i]; k < m.family.offsets[i + 1]; ++k) {
+      keep[k] = owns[i] || owns[m.family.neighbour[k]] ? 1.0 : 0.0;
+    }
+  }
+  drop_bonds_without_stiffness(m.family, keep);
+  m.fibre_arms =
+      fibre_arms(m.spec.corrections(), m.spec.fibre_kernel, m.spec.materials, m.particles, m.family,
+                 fibre_particle_sizes(m.spec.lattice, m.spec.fibre_kernel, m.size()), owns);
+  m.field.bond_stiffness = fibre_stiffness_bound(m.fibre_arms, m.family);
+}
+
 void require_material_and_body(const ModelSpec& spec) {
   if (spec.materials.empty() || spec.bodies.empty()) {
     throw std::runtime_error("a model needs at least one material and one body");
@@ -452,7 +479,9 @@ Model build_model(const ModelSpec& spec, ParticleSet particles) {
     m.density[i] = spec.materials[m.particles.material[i]].density;
   }
 
-  if (!m.effects.per_bond_field) {
+  if (m.effects.bond_model == BondModel::virtual_fibres) {
+    build_fibre_field(m);
+  } else if (!m.effects.per_bond_field) {
     const MaterialConstants& k = constants[*used.begin()];
     m.field.stiffness = k.c * m.particles.volume[0];
     m.field.critical_stretch = k.critical_stretch;

@@ -147,6 +147,7 @@ void check_unique(const Reader& r, std::map<std::string, YAML::Node>& seen, cons
 void check_consistency(Reader& r, const Scene& scene, const Marks& marks) {
   check_materials(r, scene.model, marks);
   check_solver(r, scene, marks);
+  check_bond_model(r, scene, marks);
 }
 
 } // namespace pd::scene
