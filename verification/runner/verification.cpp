@@ -128,6 +128,12 @@ const std::vector<Case>& all_cases() {
       {"compression-cube",
        "Miranda 5.2.2: C60/75 cube between stiff plates, stress-strain peak vs paper and EC2",
        run_compression_cube},
+      {"poisson-control",
+       "virtual fibres: interior lateral contraction of a block in tension, nu = 0.1, 0.3, 0.45, "
+       "3D and plane strain",
+       run_poisson_control},
+      {"poisson-control-full", "poisson-control over finer sections (slow)",
+       run_poisson_control_full},
   });
   return cases;
 }
