@@ -1193,3 +1193,74 @@ TEST(SceneParser, MirrorImageHeldByAnotherSupport) {
                                        "model:\n  mirror_coupling: consistent\n", // odd images
                        17, 13, "is itself supported"));
 }
+
+// ---- Virtual fibres (issue 17) -----------------------------------------------------------------
+
+constexpr const char* fibre_scene = R"(
+dimension: 2
+plane: strain
+lattice:
+  spacing: 0.1
+materials:
+  m:
+    youngs_modulus: 1e9
+    poisson_ratio: 0.3
+    density: 1000
+bodies:
+  - name: plate
+    material: m
+    box: [[0, 0], [1, 1]]
+model:
+  bond_model: virtual-fibres
+  fibre_kernel_exponent: 3
+  fibre_kernel_alpha: 4.5
+solver:
+  integrator: adr
+  end_time: 1
+)";
+
+TEST(SceneParser, FibreModelHonoursThePoissonRatioWithoutAWarning) {
+  const pd::Scene s = pd::parse_scene(yaml(fibre_scene), "s.yaml");
+  EXPECT_EQ(s.model.effects.bond_model, pd::BondModel::virtual_fibres);
+  EXPECT_EQ(s.model.fibre_kernel.exponent, 3);
+  EXPECT_DOUBLE_EQ(s.model.fibre_kernel.alpha, 4.5);
+  EXPECT_TRUE(s.warnings.empty()) << s.warnings.front();
+  // The same material under the default bond model warns (ν = 1/4 in plane strain).
+  std::string plain = yaml(fibre_scene);
+  plain.replace(plain.find("  bond_model: virtual-fibres\n"),
+                std::string("  bond_model: virtual-fibres\n").size(), "");
+  EXPECT_EQ(pd::parse_scene(plain, "s.yaml").warnings.size(), 1u);
+}
+
+TEST(SceneParser, FibreModelRefusesTheStaticSolver) {
+  std::string text = yaml(fibre_scene);
+  text.replace(text.find("integrator: adr"), 15, "integrator: static");
+  EXPECT_TRUE(fails_at(text, 19, 15, "no linearisation"));
+}
+
+TEST(SceneParser, FibreModelRefusesDamageAndOneDimension) {
+  std::string damage = yaml(fibre_scene);
+  damage.replace(damage.find("    density: 1000\n"), 18,
+                 "    density: 1000\n    critical_stretch: 0.01\n");
+  damage += "effects: [damage]\n";
+  EXPECT_TRUE(fails_at(damage, 16, 15, "'damage' effect is not implemented"));
+  EXPECT_TRUE(fails_at(yaml(R"(
+dimension: 1
+lattice:
+  spacing: 0.1
+materials:
+  m:
+    youngs_modulus: 1e9
+    density: 1000
+bodies:
+  - name: bar
+    material: m
+    box: [[0], [1]]
+model:
+  bond_model: virtual-fibres
+solver:
+  integrator: adr
+  end_time: 1
+)"),
+                       13, 15, "dimension 2 or 3"));
+}
