@@ -1,5 +1,7 @@
 #include "libpd/discretisation/fibre_arms.hpp"
 
+#include "libpd/discretisation/point_cloud.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <fmt/format.h>
@@ -49,8 +51,22 @@ MomentWeights fibre_moment_weights(const CorrectionSpec& spec, const FibreKernel
 } // namespace
 
 std::vector<double> fibre_particle_sizes(const LatticeSpec& lattice, const FibreKernel& kernel,
-                                         std::size_t particles) {
-  return std::vector<double>(particles, lattice.horizon() / kernel.alpha);
+                                         const ParticleSet& particles, int dim) {
+  const double lattice_size = lattice.horizon() / kernel.alpha;
+  std::vector<double> h(particles.size(), lattice_size);
+  if (particles.particle_size.empty()) {
+    return h;
+  }
+  const bool derive = std::any_of(particles.particle_size.begin(), particles.particle_size.end(),
+                                  [](double s) { return std::isnan(s); });
+  const std::vector<double> derived =
+      derive ? sizes_from_neighbours(particles.position, dim, kernel.size_neighbours)
+             : std::vector<double>{};
+  for (std::size_t i = 0; i < h.size(); ++i) {
+    const double given = particles.particle_size[i];
+    h[i] = std::isnan(given) ? derived[i] : given > 0 ? given : lattice_size;
+  }
+  return h;
 }
 
 FibreArms fibre_arms(const CorrectionSpec& spec, const FibreKernel& kernel,
@@ -71,8 +87,9 @@ FibreArms fibre_arms(const CorrectionSpec& spec, const FibreKernel& kernel,
     arms.volumetric[i] = k.volumetric;
   }
   // The moment factor needs one size for the whole lattice (the lattice's own h = δ/α).
-  const bool lattice_factor =
-      spec.volume_correction != VolumeCorrection::none && spec.lattice.spacing > 0 && dim >= 2;
+  const bool lattice_factor = particles.particle_size.empty() &&
+                              spec.volume_correction != VolumeCorrection::none &&
+                              spec.lattice.spacing > 0 && dim >= 2;
   const MomentWeights moment =
       lattice_factor ? fibre_moment_weights(spec, kernel, spec.lattice.horizon() / kernel.alpha)
                      : MomentWeights{};

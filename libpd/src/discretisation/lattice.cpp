@@ -154,6 +154,22 @@ ParticleSet generate_lattice(const ModelDimension& d, const LatticeSpec& lattice
     ps.body.push_back(e.body);
     ps.material.push_back(static_cast<std::uint16_t>(bodies[e.body].material));
   }
+  // Point-cloud bodies follow the lattice particles, in file order.
+  for (std::size_t b = 0; b < bodies.size(); ++b) {
+    const PointCloud* cloud = bodies[b].points.get();
+    if (cloud == nullptr) {
+      continue;
+    }
+    ps.particle_size.resize(ps.position.size(), 0.0);
+    for (std::size_t i = 0; i < cloud->count(); ++i) {
+      ps.position.push_back(cloud->position[i]);
+      ps.volume.push_back(cloud->volume[i]);
+      ps.body.push_back(static_cast<std::uint16_t>(b));
+      ps.material.push_back(static_cast<std::uint16_t>(bodies[b].material));
+      ps.particle_size.push_back(cloud->size.empty() ? std::numeric_limits<double>::quiet_NaN()
+                                            : cloud->size[i]);
+    }
+  }
   return ps;
 }
 

@@ -430,9 +430,10 @@ void build_fibre_field(Model& m) {
     }
   }
   drop_bonds_without_stiffness(m.family, keep);
-  m.fibre_arms =
-      fibre_arms(m.spec.corrections(), m.spec.fibre_kernel, m.spec.materials, m.particles, m.family,
-                 fibre_particle_sizes(m.spec.lattice, m.spec.fibre_kernel, m.size()), owns);
+  m.fibre_arms = fibre_arms(
+      m.spec.corrections(), m.spec.fibre_kernel, m.spec.materials, m.particles, m.family,
+      fibre_particle_sizes(m.spec.lattice, m.spec.fibre_kernel, m.particles, m.spec.dimension.dim),
+      owns);
   m.field.bond_stiffness = fibre_stiffness_bound(m.fibre_arms, m.family);
   // Per arm, the weaker end's limits: the yield strain of eq. 111 and, as a plastic strain, the
   // elongation limit of eq. 118 (δ_e/|ξ|).
@@ -460,6 +461,24 @@ void build_fibre_field(Model& m) {
       }
     }
   }
+}
+
+/// Arms of a model with point-cloud bodies (fibre_arms.hpp): each particle's horizon is α·h_a.
+BondFamily point_cloud_family(const ModelSpec& spec, const ParticleSet& particles) {
+  if (spec.effects.bond_model != BondModel::virtual_fibres) {
+    throw std::runtime_error("bodies given as particles need model.bond_model: virtual-fibres");
+  }
+  if (spec.surface_correction == SurfaceCorrection::ghost) {
+    throw std::runtime_error("bodies given as particles have no lattice sites for ghost layers: "
+                             "set model.surface_correction: none");
+  }
+  const int dim = spec.dimension.dim;
+  std::vector<double> horizon =
+      fibre_particle_sizes(spec.lattice, spec.fibre_kernel, particles, dim);
+  for (double& h : horizon) {
+    h *= spec.fibre_kernel.alpha;
+  }
+  return variable_horizon_family(particles.position, dim, horizon);
 }
 
 void require_material_and_body(const ModelSpec& spec) {
@@ -491,7 +510,11 @@ Model build_model(const ModelSpec& spec, ParticleSet particles) {
   }
   m.ghost_count = m.particles.size() - body_count;
   const std::size_t n = m.particles.size();
-  m.family = build_bond_family(m.particles.position, dim, delta, spec.horizon_rule);
+  if (m.particles.particle_size.empty()) {
+    m.family = build_bond_family(m.particles.position, dim, delta, spec.horizon_rule);
+  } else {
+    m.family = point_cloud_family(spec, m.particles);
+  }
   take_material_of_nearest_body_particle(m.family, body_count, m.particles);
   m.constraints = support_constraints(spec, m.particles, body_count);
   m.extrapolated = extrapolated_particles(spec, m.particles, body_count, m.family, m.constraints);

@@ -12,11 +12,11 @@
 //   b_i = Σ_j (A_k S_i(q) + B_k S_j(q)) q,   B_k = A_{k'} V_i / V_j   (k' the reverse bond),
 // and the mean strain of eq. 73 is ε̄_i = (1/N) Σ_j A_k |ξ_k| ε_k, exact for any isotropic strain.
 //
-// On a regular lattice the fourth moment Σ A|ξ| n⊗n⊗n⊗n has cubic, not isotropic, symmetry
-// (−1.4 % in 3D at δ = 3.015λ, −7 % in 2D): enough to move ν by several per cent at ν = 0.1.
-// Under any volume correction other than `none`, each weight is multiplied by a + b Σ_d n_d⁴
-// with a, b matching the continuum's two invariants, as the `moment` correction does for the
-// bond-based model (corrections.hpp); off the lattice the factor is 1.
+// On a regular lattice (every body a lattice region) the fourth moment Σ A|ξ| n⊗n⊗n⊗n has cubic,
+// not isotropic, symmetry (−1.4 % in 3D at δ = 3.015λ, −7 % in 2D): enough to move ν by several per
+// cent at ν = 0.1. Under any volume correction other than `none`, each weight is multiplied by a +
+// b Σ_d n_d⁴ with a, b matching the continuum's two invariants, as the `moment` correction does for
+// the bond-based model (corrections.hpp). With point-cloud bodies the factor is 1 everywhere.
 //
 // Particles that are extrapolated (ghosts, quadratic clamps: ghost_layers.hpp) own no energy:
 // their A is zero, so each body particle stores the bulk energy of the field it sees
@@ -44,10 +44,11 @@ struct FibreArms {
   bool empty() const { return own.empty(); }
 };
 
-/// Particle sizes h_a: δ/α on a lattice, so that the horizon α·h is the lattice's δ and the arms
-/// are the bond family.
+/// Particle sizes h_a: δ/α for lattice particles, so that the horizon α·h is the lattice's δ and
+/// their arms are the bond family; a particle file's h where it gives one; otherwise eq. 115 from
+/// the `kernel.size_neighbours` nearest particles.
 std::vector<double> fibre_particle_sizes(const LatticeSpec& lattice, const FibreKernel& kernel,
-                                         std::size_t particles);
+                                         const ParticleSet& particles, int dim);
 
 /// The arms of `family` on `particles` of sizes `size` (`geometry`: the model's dimension,
 /// lattice and volume correction); `owns_energy[i]` is 0 for extrapolated

@@ -39,8 +39,9 @@ struct EnumName<BondModel> {
 /// ∫ f(u) 2(N−1)π u^(N−1) du = 1 (eq. 54). A particle of size h has W(r) = f(r/h)/h^N (eq. 53)
 /// and horizon α·h.
 struct FibreKernel {
-  int exponent = 2;   ///< k (the paper uses 2, eq. 113)
-  double alpha = 5.1; ///< α, horizon over particle size (the paper's Table 1)
+  int exponent = 2;        ///< k (the paper uses 2, eq. 113)
+  double alpha = 5.1;      ///< α, horizon over particle size (the paper's Table 1)
+  int size_neighbours = 5; ///< n of eq. 115: a particle's size from its n nearest neighbours
 
   /// Z of eq. 112 in N = `dim` dimensions (2 or 3): for k = 2 it is
   /// 2(N−1)π α^N (1/N − 2/(N+2) + 1/(N+4)), eq. 113 (whose extra factor C is a misprint).
