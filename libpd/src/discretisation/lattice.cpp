@@ -119,6 +119,9 @@ ParticleSet generate_lattice(const ModelDimension& d, const LatticeSpec& lattice
   std::vector<Entry> entries;
   std::unordered_set<std::array<long long, 3>, IndexHash> seen;
   for (std::size_t b = 0; b < bodies.size(); ++b) {
+    if (bodies[b].points) {
+      continue; // its own particles, appended below
+    }
     for (const Box& box : bodies[b].region.boxes) {
       for_each_lattice_point(d, lattice, box, [&](const std::array<long long, 3>& idx) {
         if (seen.insert(idx).second) {
@@ -167,7 +170,7 @@ ParticleSet generate_lattice(const ModelDimension& d, const LatticeSpec& lattice
       ps.body.push_back(static_cast<std::uint16_t>(b));
       ps.material.push_back(static_cast<std::uint16_t>(bodies[b].material));
       ps.particle_size.push_back(cloud->size.empty() ? std::numeric_limits<double>::quiet_NaN()
-                                            : cloud->size[i]);
+                                                     : cloud->size[i]);
     }
   }
   return ps;

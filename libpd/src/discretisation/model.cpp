@@ -468,10 +468,6 @@ BondFamily point_cloud_family(const ModelSpec& spec, const ParticleSet& particle
   if (spec.effects.bond_model != BondModel::virtual_fibres) {
     throw std::runtime_error("bodies given as particles need model.bond_model: virtual-fibres");
   }
-  if (spec.surface_correction == SurfaceCorrection::ghost) {
-    throw std::runtime_error("bodies given as particles have no lattice sites for ghost layers: "
-                             "set model.surface_correction: none");
-  }
   const int dim = spec.dimension.dim;
   std::vector<double> horizon =
       fibre_particle_sizes(spec.lattice, spec.fibre_kernel, particles, dim);
@@ -505,7 +501,8 @@ Model build_model(const ModelSpec& spec, ParticleSet particles) {
   if (body_count == 0) {
     throw std::runtime_error("the bodies contain no lattice particle");
   }
-  if (spec.surface_correction == SurfaceCorrection::ghost) {
+  // Ghost sites are lattice sites: bodies given as particles have none.
+  if (spec.surface_correction == SurfaceCorrection::ghost && m.particles.particle_size.empty()) {
     append_ghost_sites(spec, m.particles);
   }
   m.ghost_count = m.particles.size() - body_count;

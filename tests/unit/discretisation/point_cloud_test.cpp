@@ -5,7 +5,10 @@
 #include "libpd/discretisation/point_cloud.hpp"
 #include "libpd/kernel/force_kernel.hpp"
 
+#include <algorithm>
 #include <array>
+#include <cstdio>
+#include <limits>
 #include <cmath>
 #include <gtest/gtest.h>
 #include <random>
@@ -57,6 +60,141 @@ TEST(PointCloud, ArmsJoinPairsInsideEitherHorizonInBothDirections) {
       EXPECT_EQ(f.neighbour[reverse[k]], i);
     }
   }
+}
+
+} // namespace
+
+namespace {
+
+constexpr double E = 200e9;
+constexpr double nu = 0.3;
+using Matrix = std::array<std::array<double, 3>, 3>;
+
+/// A plate [0, 1] × [0, 0.5] (plane strain) of columns whose spacing grows ten-fold along x,
+/// s(x) = s0 10^x, each column filled with its own spacing (so neighbouring columns do not
+/// match), every point jittered by up to ±`jitter` s, volume s².
+pd::ParticleSet graded_plate(double s0, double jitter, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(-1, 1);
+  pd::ParticleSet ps;
+  for (double x = 0.5 * s0; x < 1.0;) {
+    const double s = s0 * std::pow(10.0, x);
+    const auto rows = static_cast<int>(std::floor(0.5 / s));
+    const double dy = 0.5 / rows;
+    for (int r = 0; r < rows; ++r) {
+      ps.position.push_back({x + jitter * s * u(rng), (r + 0.5) * dy + jitter * s * u(rng), 0});
+      ps.volume.push_back(s * dy);
+      ps.material.push_back(0);
+      ps.body.push_back(0);
+      ps.particle_size.push_back(std::numeric_limits<double>::quiet_NaN());
+    }
+    x += s;
+  }
+  return ps;
+}
+
+pd::ModelSpec fibre_spec() {
+  pd::ModelSpec s;
+  s.dimension.dim = 2;
+  s.dimension.plane = pd::PlaneMode::plane_strain;
+  s.lattice.spacing = 0.01; // not used by point-cloud particles
+  s.effects.bond_model = pd::BondModel::virtual_fibres;
+  pd::Material m;
+  m.youngs_modulus = E;
+  m.poisson_ratio = nu;
+  m.density = 7800;
+  s.materials.push_back(m);
+  pd::BodySpec b;
+  b.region.boxes = {pd::Box{{0, 0, 0}, {1, 0.5, 0}}};
+  s.bodies.push_back(b);
+  return s;
+}
+
+struct PatchResult {
+  std::size_t interior = 0;
+  double stress_error = 0; ///< max over interior particles of max |σ_i − σ| / max |σ|
+  double force = 0;        ///< max over interior particles of |b_i| h_i / max |σ|
+  double size_ratio = 0;   ///< largest h over smallest h
+};
+
+PatchResult patch(const pd::ParticleSet& ps) {
+  pd::Model m = pd::build_model(fibre_spec(), ps);
+  const double e = 1e-6;
+  Matrix eps{};
+  eps[0][0] = e;
+  eps[1][1] = -0.3 * e;
+  eps[0][1] = eps[1][0] = 0.4 * e;
+  std::vector<double> y(3 * m.size());
+  for (std::size_t i = 0; i < m.size(); ++i) {
+    const auto& x = m.particles.position[i];
+    for (std::size_t a = 0; a < 3; ++a) {
+      y[3 * i + a] = x[a] + eps[a][0] * x[0] + eps[a][1] * x[1];
+    }
+  }
+  // Plane strain continuum: σ = 2Gε + (K − G) tr ε I, K of eq. 81.
+  const double G = E / (2 * (1 + nu)), K = E / (2 * (1 - 2 * nu) * (1 + nu));
+  Matrix sigma{};
+  for (int a = 0; a < 2; ++a) {
+    for (int b = 0; b < 2; ++b) {
+      sigma[a][b] = 2 * G * eps[a][b] + (a == b ? (K - G) * (eps[0][0] + eps[1][1]) : 0.0);
+    }
+  }
+  const double scale = std::max({std::abs(sigma[0][0]), std::abs(sigma[1][1]),
+                                 std::abs(sigma[0][1])});
+  std::vector<double> b(3 * m.size());
+  pd::make_force_evaluator(m)->compute(y.data(), b.data());
+  const pd::FibreArms& arms = m.fibre_arms;
+  const auto& f = m.family;
+  const auto h = pd::fibre_particle_sizes(m.spec.lattice, m.spec.fibre_kernel, m.particles, 2);
+  PatchResult r;
+  r.size_ratio = *std::max_element(h.begin(), h.end()) / *std::min_element(h.begin(), h.end());
+  for (std::size_t i = 0; i < m.size(); ++i) {
+    const auto& x = m.particles.position[i];
+    const double reach = 3 * m.spec.fibre_kernel.alpha * h[i];
+    if (std::min({x[0], 1 - x[0], x[1], 0.5 - x[1]}) < reach) {
+      continue;
+    }
+    ++r.interior;
+    // The stress of i's own half-arms (eq. 36 summed as in the virial), with ε̄ of eq. 73.
+    double mean = 0;
+    Matrix s{};
+    std::vector<std::array<double, 4>> arm; // dx, dy, r, strain
+    for (std::size_t k = f.offsets[i]; k < f.offsets[i + 1]; ++k) {
+      const std::size_t j = f.neighbour[k];
+      const double dx = y[3 * j] - y[3 * i], dy = y[3 * j + 1] - y[3 * i + 1];
+      const double len = std::sqrt(dx * dx + dy * dy);
+      const double strain = len * f.inverse_length[k] - 1;
+      mean += arms.own[k] / f.inverse_length[k] * strain / 2;
+      arm.push_back({dx, dy, len, strain});
+    }
+    std::size_t a = 0;
+    for (std::size_t k = f.offsets[i]; k < f.offsets[i + 1]; ++k, ++a) {
+      const auto [dx, dy, len, strain] = arm[a];
+      const double S = arms.shear[i] * strain + arms.volumetric[i] * mean;
+      const double d[2] = {dx, dy};
+      for (int p = 0; p < 2; ++p) {
+        for (int q = 0; q < 2; ++q) {
+          s[p][q] += arms.own[k] * S * d[p] * d[q] / len;
+        }
+      }
+    }
+    for (int p = 0; p < 2; ++p) {
+      for (int q = 0; q < 2; ++q) {
+        r.stress_error = std::max(r.stress_error, std::abs(s[p][q] - sigma[p][q]) / scale);
+      }
+    }
+    r.force = std::max(r.force, std::hypot(b[3 * i], b[3 * i + 1]) * h[i] / scale);
+  }
+  return r;
+}
+
+TEST(FibrePatchTest, IrregularGradedParticles) {
+  const PatchResult regular = patch(graded_plate(0.004, 0.0, 1));
+  const PatchResult jittered = patch(graded_plate(0.004, 0.15, 1));
+  std::printf("graded (h ratio %.1f, %zu interior): stress %.3e force %.3e\n", regular.size_ratio,
+              regular.interior, regular.stress_error, regular.force);
+  std::printf("graded+jitter (h ratio %.1f, %zu interior): stress %.3e force %.3e\n",
+              jittered.size_ratio, jittered.interior, jittered.stress_error, jittered.force);
 }
 
 } // namespace

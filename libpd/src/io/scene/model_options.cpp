@@ -44,6 +44,12 @@ constexpr Key model_keys[] = {
             "h = δ/α, so the arms are the lattice's bonds and α changes nothing",
      .range = positive,
      .bind = field_with_default<&SceneModelOptions::fibre_kernel, &FibreKernel::alpha>()},
+    {.name = "fibre_size_neighbours",
+     .type = Type::integer,
+     .doc = "virtual fibres, particle files without h: a particle's size is half its mean "
+            "distance to this many nearest particles (eq. 115)",
+     .range = at_least_one,
+     .bind = field_with_default<&SceneModelOptions::fibre_kernel, &FibreKernel::size_neighbours>()},
     {.name = "stretch",
      .type = Type::choice,
      .doc = "stretch measure (exact eq. 6, modified eq. 17, fast: no square root)",
@@ -99,6 +105,15 @@ void read_model_options(Reader& r, ModelSpec& model, Marks& marks) {
 void check_bond_model(Reader& r, const Scene& scene, const Marks& marks) {
   const ModelSpec& model = scene.model;
   if (model.effects.bond_model != BondModel::virtual_fibres) {
+    for (std::size_t i = 0; i < model.bodies.size(); ++i) {
+      if (model.bodies[i].points) {
+        r.fail(marks.body_box_nodes.at(i).front(),
+               fmt::format("body '{}' is given as particles, which only the virtual-fibre model "
+                           "runs (each particle its own size and horizon)",
+                           model.bodies[i].name),
+               "add 'bond_model: virtual-fibres' under 'model', or fill a box with the lattice");
+      }
+    }
     return;
   }
   const YAML::Node at = marks.model.find("bond_model")->at();
