@@ -2,7 +2,9 @@
 
 #include "libpd/discretisation/point_cloud.hpp"
 
+#include <Eigen/Dense>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <fmt/format.h>
 #include <stdexcept>
@@ -46,6 +48,78 @@ MomentWeights fibre_moment_weights(const CorrectionSpec& spec, const FibreKernel
   m.alpha = (c4 * a11 - a01 * c22) / det;
   m.beta = (a00 * c22 - a10 * c4) / det;
   return m;
+}
+
+/// Exponents (a, b, c) of the monomials q_x^a q_y^b q_z^c of degree 4 in `dim` dimensions, and
+/// each one's mean over the unit circle or sphere.
+struct Quartic {
+  std::array<int, 3> power;
+  double mean;
+};
+std::vector<Quartic> quartics(int dim) {
+  std::vector<Quartic> out;
+  for (int a = 4; a >= 0; --a) {
+    for (int b = 4 - a; b >= 0; --b) {
+      const int c = 4 - a - b;
+      if (dim == 2 && c != 0) {
+        continue;
+      }
+      const bool even = a % 2 == 0 && b % 2 == 0 && c % 2 == 0;
+      const bool single = a == 4 || b == 4 || c == 4;
+      const double mean = !even      ? 0.0
+                          : dim == 2 ? (single ? 3.0 / 8 : 1.0 / 8)
+                                     : (single ? 1.0 / 5 : 1.0 / 15);
+      out.push_back({{a, b, c}, mean});
+    }
+  }
+  return out;
+}
+
+/// Per-particle moment weights off the lattice: the own weights of particle i's arms
+/// (`own[k]`, unnormalised) times p(q) = Σ_m c_m φ_m(q) over the quartic monomials φ, with c
+/// such that the weighted fourth moments Σ own |ξ| φ_n(q) are the isotropic ones (the sum times
+/// ⟨φ_n⟩). The second moments, their traces, follow. A homogeneous strain then gives particle i
+/// the continuum's stress whatever its neighbours' arrangement (eq. 36 with an isotropic
+/// arrangement is what the paper assumes). Left unchanged where the system is singular or a
+/// factor would fall below 0.1 (too few or too lopsided neighbours).
+void match_fourth_moments(int dim, const ParticleSet& particles, const BondFamily& family,
+                          std::size_t i, std::vector<double>& own) {
+  const auto basis = quartics(dim);
+  const auto m = static_cast<Eigen::Index>(basis.size());
+  const std::size_t begin = family.offsets[i], end = family.offsets[i + 1];
+  Eigen::MatrixXd phi(static_cast<Eigen::Index>(end - begin), m);
+  Eigen::VectorXd w(static_cast<Eigen::Index>(end - begin));
+  double total = 0;
+  for (std::size_t k = begin; k < end; ++k) {
+    const Vec3& pi = particles.position[i];
+    const Vec3& pj = particles.position[family.neighbour[k]];
+    const double inv = family.inverse_length[k];
+    const std::array<double, 3> q{(pj[0] - pi[0]) * inv, (pj[1] - pi[1]) * inv,
+                                  (pj[2] - pi[2]) * inv};
+    const auto row = static_cast<Eigen::Index>(k - begin);
+    for (Eigen::Index n = 0; n < m; ++n) {
+      const auto& p = basis[static_cast<std::size_t>(n)].power;
+      phi(row, n) = std::pow(q[0], p[0]) * std::pow(q[1], p[1]) * std::pow(q[2], p[2]);
+    }
+    w(row) = own[k] / inv;
+    total += w(row);
+  }
+  const Eigen::MatrixXd gram = phi.transpose() * w.asDiagonal() * phi;
+  Eigen::VectorXd target(m);
+  for (Eigen::Index n = 0; n < m; ++n) {
+    target(n) = total * basis[static_cast<std::size_t>(n)].mean;
+  }
+  const Eigen::FullPivLU<Eigen::MatrixXd> lu(gram);
+  if (!lu.isInvertible()) {
+    return;
+  }
+  const Eigen::VectorXd factor = phi * lu.solve(target);
+  if (!(factor.minCoeff() >= 0.1)) {
+    return;
+  }
+  for (std::size_t k = begin; k < end; ++k) {
+    own[k] *= factor(static_cast<Eigen::Index>(k - begin));
+  }
 }
 
 } // namespace
@@ -93,6 +167,9 @@ FibreArms fibre_arms(const CorrectionSpec& spec, const FibreKernel& kernel,
   const MomentWeights moment =
       lattice_factor ? fibre_moment_weights(spec, kernel, spec.lattice.horizon() / kernel.alpha)
                      : MomentWeights{};
+  // Off the lattice, each particle's own moments instead (match_fourth_moments).
+  const bool particle_factor = !particles.particle_size.empty() &&
+                               spec.volume_correction != VolumeCorrection::none && dim >= 2;
   const std::size_t nb = family.directed_bond_count();
   arms.own.assign(nb, 0.0);
   arms.other.assign(nb, 0.0);
@@ -110,7 +187,12 @@ FibreArms fibre_arms(const CorrectionSpec& spec, const FibreKernel& kernel,
       const Vec3 xi{pj[0] - pi[0], pj[1] - pi[1], pj[2] - pi[2]};
       const double factor = lattice_factor ? moment.weight(xi) : 1.0;
       arms.own[k] = particles.volume[j] * kernel_weight(kernel, dim, r, size[i]) * factor;
-      total[i] += arms.own[k] * r;
+    }
+    if (particle_factor) {
+      match_fourth_moments(dim, particles, family, i, arms.own);
+    }
+    for (std::size_t k = family.offsets[i]; k < family.offsets[i + 1]; ++k) {
+      total[i] += arms.own[k] / family.inverse_length[k];
     }
     if (!(total[i] > 0)) {
       throw std::runtime_error(fmt::format(

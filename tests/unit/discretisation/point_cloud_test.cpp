@@ -7,10 +7,10 @@
 
 #include <algorithm>
 #include <array>
-#include <cstdio>
-#include <limits>
 #include <cmath>
+#include <cstdio>
 #include <gtest/gtest.h>
+#include <limits>
 #include <random>
 #include <vector>
 
@@ -93,8 +93,9 @@ pd::ParticleSet graded_plate(double s0, double jitter, std::uint64_t seed) {
   return ps;
 }
 
-pd::ModelSpec fibre_spec() {
+pd::ModelSpec fibre_spec(pd::VolumeCorrection volume) {
   pd::ModelSpec s;
+  s.volume_correction = volume;
   s.dimension.dim = 2;
   s.dimension.plane = pd::PlaneMode::plane_strain;
   s.lattice.spacing = 0.01; // not used by point-cloud particles
@@ -117,8 +118,8 @@ struct PatchResult {
   double size_ratio = 0;   ///< largest h over smallest h
 };
 
-PatchResult patch(const pd::ParticleSet& ps) {
-  pd::Model m = pd::build_model(fibre_spec(), ps);
+PatchResult patch(const pd::ParticleSet& ps, pd::VolumeCorrection volume) {
+  pd::Model m = pd::build_model(fibre_spec(volume), ps);
   const double e = 1e-6;
   Matrix eps{};
   eps[0][0] = e;
@@ -139,8 +140,8 @@ PatchResult patch(const pd::ParticleSet& ps) {
       sigma[a][b] = 2 * G * eps[a][b] + (a == b ? (K - G) * (eps[0][0] + eps[1][1]) : 0.0);
     }
   }
-  const double scale = std::max({std::abs(sigma[0][0]), std::abs(sigma[1][1]),
-                                 std::abs(sigma[0][1])});
+  const double scale =
+      std::max({std::abs(sigma[0][0]), std::abs(sigma[1][1]), std::abs(sigma[0][1])});
   std::vector<double> b(3 * m.size());
   pd::make_force_evaluator(m)->compute(y.data(), b.data());
   const pd::FibreArms& arms = m.fibre_arms;
@@ -188,13 +189,24 @@ PatchResult patch(const pd::ParticleSet& ps) {
   return r;
 }
 
-TEST(FibrePatchTest, IrregularGradedParticles) {
-  const PatchResult regular = patch(graded_plate(0.004, 0.0, 1));
-  const PatchResult jittered = patch(graded_plate(0.004, 0.15, 1));
-  std::printf("graded (h ratio %.1f, %zu interior): stress %.3e force %.3e\n", regular.size_ratio,
-              regular.interior, regular.stress_error, regular.force);
-  std::printf("graded+jitter (h ratio %.1f, %zu interior): stress %.3e force %.3e\n",
-              jittered.size_ratio, jittered.interior, jittered.stress_error, jittered.force);
+TEST(FibrePatchTest, InteriorStressIsTheContinuumsOnIrregularGradedParticles) {
+  // Issue 17's patch test: sizes varying more than ten-fold, columns that do not match, points
+  // jittered by ±0.15 s. With the per-particle moment weights (volume_correction other than
+  // none, the scenes' default) every interior particle carries the continuum's stress; with the
+  // kernel weights alone the arrangement shows (measured 2026-11-25: 10 % graded, 21 % jittered).
+  const PatchResult r = patch(graded_plate(0.004, 0.15, 1), pd::VolumeCorrection::moment);
+  EXPECT_GE(r.size_ratio, 10.0);
+  EXPECT_GE(r.interior, 1000U);
+  EXPECT_LT(r.stress_error, 0.01);
+  const PatchResult plain = patch(graded_plate(0.004, 0.15, 1), pd::VolumeCorrection::none);
+  EXPECT_GT(plain.stress_error, 0.05); // the weights are what makes the difference
+  // Not yet met: "no spurious forces". The arm forces at an interior particle do not cancel on an
+  // irregular set (an odd-moment, SPH-like zeroth-order error that even-moment weights cannot
+  // remove): max |b_i| h_i / |σ| is reported, measured 0.20 (0.14 without jitter).
+  RecordProperty("spurious_force_h_over_sigma", std::to_string(r.force));
+  std::printf("graded irregular plate: h ratio %.1f, %zu interior particles, stress error %.2e, "
+              "max |b| h/|σ| = %.3f (kernel weights alone: stress error %.3f)\n",
+              r.size_ratio, r.interior, r.stress_error, r.force, plain.stress_error);
 }
 
 } // namespace
