@@ -22,7 +22,13 @@
 // continuum stress on any arrangement (graded, jittered: 2e-6, against 21 % with the kernel
 // weights alone). What these even-moment weights cannot remove is the arms' force imbalance on
 // an irregular set (an odd moment): under a homogeneous strain interior particles keep forces of
-// about 0.2 σ/h (tests/unit/discretisation/point_cloud_test.cpp).
+// about 0.2 σ/h (tests/unit/discretisation/point_cloud_test.cpp). Where h varies the imbalance is
+// systematic, along ∇h (mean 0.033 σ/h on a ten-fold graded plate): each end weights an arm with
+// its own kernel (eq. 70), and the neighbours' kernels are not symmetric about a particle where h
+// varies (SPH's missing grad-h terms). It acts like a body force proportional to the strain: a
+// graded plate held at its fine end and pulled at its coarse one shows a displacement decaying
+// exponentially from the load. Until a correction lands, graded particle sets are not fit for
+// loaded problems.
 //
 // Particles that are extrapolated (ghosts, quadratic clamps: ghost_layers.hpp) own no energy:
 // their A is zero, so each body particle stores the bulk energy of the field it sees
