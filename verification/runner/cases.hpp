@@ -36,5 +36,7 @@ Json run_compression_cube(const Context& ctx);
 Json run_symmetry_half_full(const Context& ctx);
 Json run_crack_opening(const Context& ctx);
 Json run_fracture_stop(const Context& ctx);
+Json run_poisson_control(const Context& ctx);
+Json run_poisson_control_full(const Context& ctx);
 
 } // namespace pd::verification

@@ -136,6 +136,12 @@ const std::vector<Case>& all_cases() {
       {"fracture-stop",
        "pre-cracked glass plate pulled to failure: stops on solver.stop_when, failure load",
        run_fracture_stop},
+      {"poisson-control",
+       "virtual fibres: interior lateral contraction of a block in tension, nu = 0.1, 0.3, 0.45, "
+       "3D and plane strain",
+       run_poisson_control},
+      {"poisson-control-full", "poisson-control over finer sections (slow)",
+       run_poisson_control_full},
   });
   return cases;
 }

@@ -124,6 +124,9 @@ ParticleSet generate_lattice(const ModelDimension& d, const LatticeSpec& lattice
   std::vector<Entry> entries;
   std::unordered_set<std::array<long long, 3>, IndexHash> seen;
   for (std::size_t b = 0; b < bodies.size(); ++b) {
+    if (bodies[b].points) {
+      continue; // its own particles, appended below
+    }
     const Region& region = bodies[b].region;
     // Shapes and holes: the lattice points of the covering boxes that the region holds, with the
     // tolerance of index_range.
@@ -166,6 +169,22 @@ ParticleSet generate_lattice(const ModelDimension& d, const LatticeSpec& lattice
     ps.volume.push_back(v);
     ps.body.push_back(e.body);
     ps.material.push_back(static_cast<std::uint16_t>(bodies[e.body].material));
+  }
+  // Point-cloud bodies follow the lattice particles, in file order.
+  for (std::size_t b = 0; b < bodies.size(); ++b) {
+    const PointCloud* cloud = bodies[b].points.get();
+    if (cloud == nullptr) {
+      continue;
+    }
+    ps.particle_size.resize(ps.position.size(), 0.0);
+    for (std::size_t i = 0; i < cloud->count(); ++i) {
+      ps.position.push_back(cloud->position[i]);
+      ps.volume.push_back(cloud->volume[i]);
+      ps.body.push_back(static_cast<std::uint16_t>(b));
+      ps.material.push_back(static_cast<std::uint16_t>(bodies[b].material));
+      ps.particle_size.push_back(cloud->size.empty() ? std::numeric_limits<double>::quiet_NaN()
+                                                     : cloud->size[i]);
+    }
   }
   return ps;
 }

@@ -246,7 +246,9 @@ EffectSet kernel_effects(const ModelSpec& spec, std::size_t materials_used) {
   const bool weighted_mirrors = spec.mirror_coupling != MirrorCoupling::copy &&
                                 std::any_of(spec.supports.begin(), spec.supports.end(),
                                             [](const SupportSpec& s) { return s.mirrors(); });
-  effects.per_bond_field = materials_used > 1 || spec.corrections().corrects() ||
+  // The fibre model's field is the bound of fibre_stiffness_bound, one value per bond.
+  effects.per_bond_field = spec.effects.bond_model == BondModel::virtual_fibres ||
+                           materials_used > 1 || spec.corrections().corrects() ||
                            spec.lattice.volume_variation > 0 || weighted_mirrors;
   effects.body_force = std::any_of(spec.loads.begin(), spec.loads.end(), [](const LoadSpec& l) {
     return l.load.kind == BoxRegionLoad::Kind::body;
@@ -270,6 +272,10 @@ ModelStorage model_storage(const ModelSpec& spec, const EffectSet& effects) {
   }
   s.per_directed_bond += (effects.damage ? sizeof(std::uint8_t) : 0) +
                          (effects.plasticity ? dbl : 0); // broken flags, plastic stretch
+  if (effects.bond_model == BondModel::virtual_fibres) {
+    s.per_directed_bond += 3 * dbl; // the arm weights A, B (fibre_arms.hpp), the kernel's A|ξ|/N
+    s.per_particle += 3 * dbl;      // two moduli, and the kernel's mean strain
+  }
   return s;
 }
 
@@ -594,6 +600,68 @@ std::vector<std::size_t> cut_bonds_across_cracks(const ModelSpec& spec, const Pa
   return cut;
 }
 
+/// The virtual-fibre model's arms (fibre_arms.hpp) and, as its per-bond field, the pair
+/// stiffness that bounds its operator (for the time step and ADR). Arms between two extrapolated
+/// particles carry nothing and leave the family, as for the bond-based model.
+void build_fibre_field(Model& m) {
+  std::vector<std::uint8_t> owns(m.size(), 1);
+  for (const std::uint32_t d : m.extrapolated.particle) {
+    owns[d] = 0;
+  }
+  std::vector<double> keep(m.family.directed_bond_count(), 0.0);
+  for (std::size_t i = 0; i < m.size(); ++i) {
+    for (std::size_t k = m.family.offsets[i]; k < m.family.offsets[i + 1]; ++k) {
+      keep[k] = owns[i] || owns[m.family.neighbour[k]] ? 1.0 : 0.0;
+    }
+  }
+  drop_bonds_without_stiffness(m.family, keep);
+  m.fibre_arms = fibre_arms(
+      m.spec.corrections(), m.spec.fibre_kernel, m.spec.materials, m.particles, m.family,
+      fibre_particle_sizes(m.spec.lattice, m.spec.fibre_kernel, m.particles, m.spec.dimension.dim),
+      owns);
+  m.field.bond_stiffness = fibre_stiffness_bound(m.fibre_arms, m.family);
+  // Per arm, the weaker end's limits: the yield strain of eq. 111 and, as a plastic strain, the
+  // elongation limit of eq. 118 (δ_e/|ξ|).
+  const std::size_t nb = m.family.directed_bond_count();
+  const auto& materials = m.spec.materials;
+  const auto& material = m.particles.material;
+  if (m.effects.plasticity) {
+    m.field.bond_yield_stretch.resize(nb);
+  }
+  if (m.effects.damage) {
+    m.field.bond_critical_stretch.resize(nb);
+  }
+  for (std::size_t i = 0; i < m.size(); ++i) {
+    for (std::size_t k = m.family.offsets[i]; k < m.family.offsets[i + 1]; ++k) {
+      const Material& a = materials[material[i]];
+      const Material& b = materials[material[m.family.neighbour[k]]];
+      if (m.effects.plasticity) {
+        m.field.bond_yield_stretch[k] =
+            std::min(a.yield_stretch.value_or(no_limit), b.yield_stretch.value_or(no_limit));
+      }
+      if (m.effects.damage) {
+        m.field.bond_critical_stretch[k] =
+            std::min(a.elongation_limit.value_or(no_limit), b.elongation_limit.value_or(no_limit)) *
+            m.family.inverse_length[k];
+      }
+    }
+  }
+}
+
+/// Arms of a model with point-cloud bodies (fibre_arms.hpp): each particle's horizon is α·h_a.
+BondFamily point_cloud_family(const ModelSpec& spec, const ParticleSet& particles) {
+  if (spec.effects.bond_model != BondModel::virtual_fibres) {
+    throw std::runtime_error("bodies given as particles need model.bond_model: virtual-fibres");
+  }
+  const int dim = spec.dimension.dim;
+  std::vector<double> horizon =
+      fibre_particle_sizes(spec.lattice, spec.fibre_kernel, particles, dim);
+  for (double& h : horizon) {
+    h *= spec.fibre_kernel.alpha;
+  }
+  return variable_horizon_family(particles.position, dim, horizon);
+}
+
 void require_material_and_body(const ModelSpec& spec) {
   if (spec.materials.empty() || spec.bodies.empty()) {
     throw std::runtime_error("a model needs at least one material and one body");
@@ -618,12 +686,17 @@ Model build_model(const ModelSpec& spec, ParticleSet particles) {
   if (body_count == 0) {
     throw std::runtime_error("the bodies contain no lattice particle");
   }
-  if (spec.surface_correction == SurfaceCorrection::ghost) {
+  // Ghost sites are lattice sites: bodies given as particles have none.
+  if (spec.surface_correction == SurfaceCorrection::ghost && m.particles.particle_size.empty()) {
     append_ghost_sites(spec, m.particles);
   }
   m.ghost_count = m.particles.size() - body_count;
   const std::size_t n = m.particles.size();
-  m.family = build_bond_family(m.particles.position, dim, delta, spec.horizon_rule);
+  if (m.particles.particle_size.empty()) {
+    m.family = build_bond_family(m.particles.position, dim, delta, spec.horizon_rule);
+  } else {
+    m.family = point_cloud_family(spec, m.particles);
+  }
   m.bonds_cut_by_crack = cut_bonds_across_cracks(spec, m.particles, m.family);
   take_material_of_nearest_body_particle(m.family, body_count, m.particles);
   m.constraints = support_constraints(spec, m.particles, body_count);
@@ -638,7 +711,9 @@ Model build_model(const ModelSpec& spec, ParticleSet particles) {
     m.density[i] = spec.materials[m.particles.material[i]].density;
   }
 
-  if (!m.effects.per_bond_field) {
+  if (m.effects.bond_model == BondModel::virtual_fibres) {
+    build_fibre_field(m);
+  } else if (!m.effects.per_bond_field) {
     const MaterialConstants& k = constants[*used.begin()];
     m.field.stiffness = k.c * m.particles.volume[0];
     m.field.critical_stretch = k.critical_stretch;

@@ -268,8 +268,8 @@ ResourceEstimate estimate_resources(const ModelSpec& spec, const SolverSpec& sol
   // m³: 8 s at m = 40); beyond, the estimate keeps every offset within δ, which can only count too
   // many. Solved once, for both the ghosts' reach and the family.
   std::optional<GradientWeights> weights;
-  if (spec.volume_correction == VolumeCorrection::gradient && spec.lattice.horizon_factor <= 40 &&
-      spec.lattice.position_jitter == 0) {
+  if (spec.corrections().volume_correction == VolumeCorrection::gradient &&
+      spec.lattice.horizon_factor <= 40 && spec.lattice.position_jitter == 0) {
     weights = gradient_matched_weights(spec.corrections());
   }
   // Ghost sites (surface_correction ghost): the lattice sites within reach of a stiff bond.

@@ -143,6 +143,9 @@ std::unique_ptr<ForceEvaluator> pick_law(Model& m, kernel::RowKernel simd) {
 } // namespace
 
 std::unique_ptr<ForceEvaluator> make_force_evaluator(Model& m, KernelPath path) {
+  if (m.effects.bond_model == BondModel::virtual_fibres) {
+    return make_fibre_evaluator(m); // its own kernel (src/kernel/fibre_kernel.cpp), one path
+  }
   if (m.effects.damage && m.state.broken.size() != m.family.directed_bond_count()) {
     throw std::logic_error("damage effect without bond state: build the model with build_model");
   }

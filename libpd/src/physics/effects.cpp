@@ -8,6 +8,9 @@ std::string to_string(StretchKind kind) {
 
 std::vector<std::string> EffectSet::names() const {
   std::vector<std::string> out{"stretch:" + to_string(stretch)};
+  if (bond_model != BondModel::micro_elastic) {
+    out.emplace_back("bond-model:" + std::string(name_of(bond_model)));
+  }
   if (damage) {
     out.emplace_back("damage");
   }

@@ -1,5 +1,6 @@
 // Scene parser: every class of bad input is reported as a SceneError at the offending node, valid
 // scenes fill every field, and the generated template is itself a valid scene.
+#include "libpd/discretisation/model.hpp"
 #include "libpd/io/scene.hpp"
 #include "scene_test_support.hpp"
 
@@ -185,7 +186,8 @@ lattice:
 }
 
 TEST(SceneParser, MissingBoxOfBody) {
-  EXPECT_TRUE(fails_at(yaml(R"(
+  EXPECT_TRUE(
+      fails_at(yaml(R"(
 dimension: 1
 lattice:
   spacing: 0.1
@@ -199,7 +201,7 @@ bodies:
 solver:
   end_time: 1
 )"),
-                       9, 5, "missing 'box', 'boxes', 'cylinder' or 'sphere' in body 'bar'"));
+               9, 5, "missing 'box', 'boxes', 'cylinder', 'sphere' or 'particles' in body 'bar'"));
 }
 
 TEST(SceneParser, BoxAndBoxesTogether) {
@@ -1158,4 +1160,140 @@ TEST(SceneParser, MirrorImageHeldByAnotherSupport) {
                                        "  - name: f\n    box: [[0.3], [0.5]]\n    fixed: [x]\n"
                                        "model:\n  mirror_coupling: consistent\n", // odd images
                        17, 13, "is itself supported"));
+}
+
+// ---- Virtual fibres (issue 17) -----------------------------------------------------------------
+
+constexpr const char* fibre_scene = R"(
+dimension: 2
+plane: strain
+lattice:
+  spacing: 0.1
+materials:
+  m:
+    youngs_modulus: 1e9
+    poisson_ratio: 0.3
+    density: 1000
+bodies:
+  - name: plate
+    material: m
+    box: [[0, 0], [1, 1]]
+model:
+  bond_model: virtual-fibres
+  fibre_kernel_exponent: 3
+  fibre_kernel_alpha: 4.5
+solver:
+  integrator: adr
+  end_time: 1
+)";
+
+TEST(SceneParser, FibreModelHonoursThePoissonRatioWithoutAWarning) {
+  const pd::Scene s = pd::parse_scene(yaml(fibre_scene), "s.yaml");
+  EXPECT_EQ(s.model.effects.bond_model, pd::BondModel::virtual_fibres);
+  EXPECT_EQ(s.model.fibre_kernel.exponent, 3);
+  EXPECT_DOUBLE_EQ(s.model.fibre_kernel.alpha, 4.5);
+  EXPECT_TRUE(s.warnings.empty()) << s.warnings.front();
+  // The same material under the default bond model warns (ν = 1/4 in plane strain).
+  std::string plain = yaml(fibre_scene);
+  plain.replace(plain.find("  bond_model: virtual-fibres\n"),
+                std::string("  bond_model: virtual-fibres\n").size(), "");
+  EXPECT_EQ(pd::parse_scene(plain, "s.yaml").warnings.size(), 1u);
+}
+
+TEST(SceneParser, FibreModelRefusesTheStaticSolver) {
+  std::string text = yaml(fibre_scene);
+  text.replace(text.find("integrator: adr"), 15, "integrator: static");
+  EXPECT_TRUE(fails_at(text, 19, 15, "no linearisation"));
+}
+
+TEST(SceneParser, FibreModelRefusesDamageWithoutPlasticityAndOneDimension) {
+  std::string damage = yaml(fibre_scene);
+  damage.replace(damage.find("    density: 1000\n"), 18,
+                 "    density: 1000\n    critical_stretch: 0.01\n");
+  damage += "effects: [damage]\n";
+  EXPECT_TRUE(fails_at(damage, 16, 15, "needs 'plasticity'"));
+  EXPECT_TRUE(fails_at(yaml(R"(
+dimension: 1
+lattice:
+  spacing: 0.1
+materials:
+  m:
+    youngs_modulus: 1e9
+    density: 1000
+bodies:
+  - name: bar
+    material: m
+    box: [[0], [1]]
+model:
+  bond_model: virtual-fibres
+solver:
+  integrator: adr
+  end_time: 1
+)"),
+                       13, 15, "dimension 2 or 3"));
+}
+
+// ---- Bodies given as particle files (issue 17)
+// ----------------------------------------------------
+
+/// A fibre scene whose body is the particle file `csv` (written to a temporary file).
+std::string particle_scene(const std::string& csv, const std::string& bond_model) {
+  const auto path =
+      std::filesystem::temp_directory_path() /
+      ("libpd-particles-" +
+       std::to_string(::testing::UnitTest::GetInstance()->current_test_info()->line()) + ".csv");
+  std::ofstream(path) << csv;
+  return "dimension: 2\n"
+         "lattice:\n"
+         "  spacing: 0.1\n"
+         "materials:\n"
+         "  m:\n"
+         "    youngs_modulus: 1e9\n"
+         "    poisson_ratio: 0.2\n"
+         "    density: 1000\n"
+         "bodies:\n"
+         "  - name: plate\n"
+         "    material: m\n"
+         "    particles: " +
+         path.string() +
+         "\n"
+         "model:\n"
+         "  bond_model: " +
+         bond_model +
+         "\n"
+         "solver:\n"
+         "  integrator: adr\n"
+         "  end_time: 1\n";
+}
+
+TEST(SceneParser, ParticleFileBodyIsReadAndBuilt) {
+  std::string csv = "x,y,volume\n";
+  for (int j = 0; j < 8; ++j) {
+    for (int i = 0; i < 8; ++i) {
+      csv += std::to_string(0.1 * i + 0.013 * (j % 3)) + "," + std::to_string(0.1 * j) + ",0.01\n";
+    }
+  }
+  const pd::Scene s = pd::parse_scene(particle_scene(csv, "virtual-fibres"), "s.yaml");
+  ASSERT_TRUE(s.model.bodies.front().points);
+  EXPECT_EQ(s.model.bodies.front().points->count(), 64U);
+  const pd::Model m = pd::build_model(s.model);
+  EXPECT_EQ(m.size(), 64U); // no lattice particles in the bounding box, no ghosts
+  EXPECT_GT(m.family.directed_bond_count(), 0U);
+}
+
+TEST(SceneParser, ParticleFileWithBadContentIsRefusedNamingFileAndRow) {
+  const std::string text =
+      particle_scene("x,y,volume\n0,0,0.01\n0.1,0,0.01\n0,0,0.01\n", "virtual-fibres");
+  try {
+    pd::parse_scene(text, "s.yaml");
+    ADD_FAILURE() << "parsed";
+  } catch (const pd::SceneError& e) {
+    const std::string message = e.what();
+    EXPECT_EQ(e.mark().line, 12);
+    EXPECT_NE(message.find(".csv:4: duplicate point (0, 0, 0): row 2 has the same position"),
+              std::string::npos)
+        << message;
+  }
+  EXPECT_TRUE(fails_at(particle_scene("x,y,volume\n0,0,0.01\n0.1,0,0.01\n", "micro-elastic"), 12,
+                       16, "only the virtual-fibre model"));
 }

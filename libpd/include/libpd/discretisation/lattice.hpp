@@ -14,11 +14,13 @@
 #include "libpd/core/geometry.hpp"
 #include "libpd/core/names.hpp"
 #include "libpd/discretisation/bond_family.hpp"
+#include "libpd/discretisation/point_cloud.hpp"
 #include "libpd/physics/material.hpp"
 
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -56,6 +58,8 @@ struct BodySpec {
   std::string name;
   Region region;
   int material = 0;
+  /// A body of given particles (a particle file) instead of the lattice points of `region`.
+  std::shared_ptr<const PointCloud> points;
 
   bool operator==(const BodySpec&) const = default;
 };
@@ -66,6 +70,9 @@ struct ParticleSet {
   std::vector<double> volume;
   std::vector<std::uint16_t> material;
   std::vector<std::uint16_t> body;
+  /// Particle size h where a body is a point cloud: the file's h, NaN where it is to be derived
+  /// (eq. 115), 0 for lattice particles (h = δ/α). Empty when every body is a lattice region.
+  std::vector<double> particle_size;
 
   std::size_t size() const { return position.size(); }
 };

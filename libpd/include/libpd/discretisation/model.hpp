@@ -5,6 +5,7 @@
 #include "libpd/core/names.hpp"
 #include "libpd/discretisation/bond_family.hpp"
 #include "libpd/discretisation/corrections.hpp"
+#include "libpd/discretisation/fibre_arms.hpp"
 #include "libpd/discretisation/ghost_layers.hpp"
 #include "libpd/discretisation/lattice.hpp"
 #include "libpd/discretisation/mirror_constraints.hpp"
@@ -102,6 +103,7 @@ struct ModelSpec {
   std::vector<LoadSpec> loads;
   std::vector<Crack> cracks; ///< pre-cracks: no bond crosses them
   EffectSet effects;
+  FibreKernel fibre_kernel; ///< read only under effects.bond_model = virtual_fibres
   SurfaceCorrection surface_correction = SurfaceCorrection::none;
   VolumeCorrection volume_correction = VolumeCorrection::none;
   /// A spec built in C++ is the bare model (no corrections, `copy` coupling); scene files take the
@@ -110,9 +112,14 @@ struct ModelSpec {
   /// that builds a spec by hand.
   MirrorCoupling mirror_coupling = MirrorCoupling::copy;
 
-  /// What the bond corrections read of the model (corrections.hpp).
+  /// What the bond corrections read of the model (corrections.hpp). The fibre model reads
+  /// `gradient` as the moment weights (fibre_arms.hpp), so its ghost layers reach the whole
+  /// horizon, not only the bonds that `gradient` weights keep stiff.
   CorrectionSpec corrections() const {
-    return {dimension, lattice, horizon_rule, surface_correction, volume_correction};
+    const bool fibres = effects.bond_model == BondModel::virtual_fibres &&
+                        volume_correction == VolumeCorrection::gradient;
+    return {dimension, lattice, horizon_rule, surface_correction,
+            fibres ? VolumeCorrection::moment : volume_correction};
   }
 };
 
@@ -123,6 +130,7 @@ struct Model {
   BondField field;
   BondState state;
   EffectSet effects;
+  FibreArms fibre_arms;                ///< the arm weights, virtual fibres only (fibre_arms.hpp)
   std::vector<double> density;         ///< per particle [kg/m³]
   std::vector<Constraint> constraints; ///< sorted by particle, then component
   /// Ghost particles and quadratically extrapolated clamp particles (ghost_layers.hpp): massless,

@@ -3,6 +3,7 @@
 // branch, memory or time in the bond loop.
 #pragma once
 
+#include "libpd/physics/fibres.hpp"
 #include "libpd/physics/stretch.hpp"
 
 #include <string>
@@ -11,6 +12,8 @@
 namespace pd {
 
 struct EffectSet {
+  /// What the bonds carry; `virtual_fibres` selects its own kernel (kernel/fibre_kernel.hpp).
+  BondModel bond_model = BondModel::micro_elastic;
   StretchKind stretch = StretchKind::exact; ///< bond-law parameter
   bool damage = false;     ///< brittle bonds with critical stretch, damage index (eqs. 9–13)
   bool plasticity = false; ///< micro-plastic bonds with plastic stretch history (eqs. 14–16)

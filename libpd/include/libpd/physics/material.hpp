@@ -43,7 +43,10 @@ struct Material {
   double density = 0;          ///< ρ [kg/m³]
   std::optional<double> fracture_energy;  ///< G0 [J/m²]; with it s0 is derived (eq. 11)
   std::optional<double> critical_stretch; ///< s0, given directly
-  std::optional<double> yield_stretch;    ///< s_Y (eq. 15)
+  std::optional<double> yield_stretch;    ///< s_Y (eq. 15); virtual fibres: ε_yield (eq. 111)
+  /// δ_e [m], virtual fibres only: an arm fails once its plastic elongation exceeds it
+  /// (Olsson et al. 2021, eq. 118).
+  std::optional<double> elongation_limit;
   /// Multiplies c. Used for deliberately stiff regions (Miranda §5.2.2 machine plates).
   double stiffness_factor = 1.0;
 };

@@ -1,7 +1,10 @@
-// The `bodies` list: regions of the lattice, each made of one material.
+// The `bodies` list: regions of the lattice or particle files, each made of one material.
+#include "libpd/io/particle_file.hpp"
 #include "sections.hpp"
 
 #include <algorithm>
+#include <filesystem>
+#include <memory>
 
 namespace pd::scene {
 
@@ -36,7 +39,39 @@ constexpr Key body_keys[] = {
      .doc = "shapes taken out of the body: holes, notches, cuts",
      .show = Show::commented,
      .section = &shape_section},
+    {.name = "particles",
+     .type = Type::string,
+     .doc = "instead of box: a CSV file of particles (x, y[, z], volume or mass and density, "
+            "optional h), relative to the scene file; virtual fibres only",
+     .example = "plate.csv",
+     .need = Need::one_of,
+     .group = 1,
+     .show = Show::commented},
 };
+
+/// A body of given particles: its file read (errors name the file and the row), its region the
+/// particles' bounding box, which supports, loads and probes are checked against.
+void read_particle_body(Reader& r, const Fields& f, BodySpec& body, Marks& marks) {
+  const Entry* e = f.find("particles");
+  std::filesystem::path path = *r.string(f, "particles");
+  if (path.is_relative()) {
+    path = std::filesystem::path(r.file()).parent_path() / path;
+  }
+  try {
+    body.points = std::make_shared<const PointCloud>(read_particle_csv(path.string(), r.dim));
+  } catch (const ParticleFileError& error) {
+    r.fail(e->at(), error.what(), "fix the file (see SCENE_FORMAT.md, particle files)");
+  }
+  Box bounds{body.points->position.front(), body.points->position.front()};
+  for (const Vec3& p : body.points->position) {
+    for (std::size_t a = 0; a < 3; ++a) {
+      bounds.lo[a] = std::min(bounds.lo[a], p[a]);
+      bounds.hi[a] = std::max(bounds.hi[a], p[a]);
+    }
+  }
+  body.region.boxes = {bounds};
+  marks.body_box_nodes.push_back({e->at()});
+}
 
 } // namespace
 
@@ -70,6 +105,19 @@ void read_bodies(Reader& r, ModelSpec& model, Marks& marks) {
              suggestion(material, material_names, "materials defined"));
     }
     body.material = static_cast<int>(found - material_names.begin());
+    if (f.has("particles")) {
+      read_particle_body(r, f, body, marks);
+      marks.body_nodes.push_back(f.find("particles")->at());
+      if (const Entry* minus = f.find("minus")) {
+        r.fail(minus->name,
+               fmt::format("body '{}' is read from a particle file: 'minus' applies "
+                           "only to lattice bodies",
+                           body.name),
+               "remove the particles inside the hole from the file, or drop 'minus'");
+      }
+      model.bodies.push_back(std::move(body));
+      continue;
+    }
     YAML::Node where;
     if (std::optional<Shape> shape = read_body_shape(r, f)) {
       body.region.shapes.push_back(*shape);

@@ -13,7 +13,9 @@ void check_materials(Reader& r, const ModelSpec& model, const Marks& marks) {
   const auto& material_nodes = marks.material_nodes;
   for (std::size_t i = 0; i < model.materials.size(); ++i) {
     const Material& m = model.materials[i];
-    if (model.effects.damage && !m.fracture_energy && !m.critical_stretch) {
+    // Fibre arms fail by plastic elongation instead (check_bond_model).
+    const bool fibres = model.effects.bond_model == BondModel::virtual_fibres;
+    if (model.effects.damage && !fibres && !m.fracture_energy && !m.critical_stretch) {
       r.fail(material_nodes[i],
              fmt::format("effect 'damage' needs a critical stretch, but material '{}' has neither "
                          "fracture_energy nor critical_stretch",
@@ -38,6 +40,12 @@ void check_materials(Reader& r, const ModelSpec& model, const Marks& marks) {
                fmt::format("'{}' of material '{}' is unused: the 'damage' effect is not listed",
                            key, m.name));
       }
+    }
+    if (f.has("elongation_limit") && !(fibres && model.effects.damage)) {
+      r.warn(f.find("elongation_limit")->name,
+             fmt::format("'elongation_limit' of material '{}' is unused: only the virtual-fibre "
+                         "model with the 'damage' effect reads it",
+                         m.name));
     }
     if (f.has("yield_stretch") && !model.effects.plasticity) {
       r.warn(f.find("yield_stretch")->name,
@@ -201,6 +209,7 @@ void check_consistency(Reader& r, const Scene& scene, const Marks& marks) {
   check_materials(r, scene.model, marks);
   check_solver(r, scene, marks);
   check_probes(r, scene, marks);
+  check_bond_model(r, scene, marks);
 }
 
 } // namespace pd::scene

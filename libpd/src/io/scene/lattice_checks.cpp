@@ -346,6 +346,9 @@ void warn_represented_volume(Reader& r, const ModelSpec& model, const Marks& mar
   const double unit = cell_volume(d, 1.0); // thickness (2D) or cross-section (1D)
   for (std::size_t i = 0; i < model.bodies.size(); ++i) {
     const BodySpec& body = model.bodies[i];
+    if (body.points) {
+      continue; // its particles carry their own volumes
+    }
     if (body.region.only_boxes()) {
       if (lattice.convention != LatticeConvention::cell_centered) {
         continue; // node-based particles never tile their box

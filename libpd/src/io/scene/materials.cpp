@@ -19,7 +19,8 @@ constexpr Key material_keys[] = {
     {.name = "poisson_ratio",
      .type = Type::number,
      .doc = "ν as measured; bond-based PD fixes ν (1/4 in 3D and plane strain, 1/3 in plane "
-            "stress), other values only cause a warning",
+            "stress), other values only cause a warning; model.bond_model: virtual-fibres "
+            "honours it",
      .range = {-1, 0.5, true, true},
      .range_hint = "a stable isotropic material has -1 < ν < 0.5",
      .bind = field_with_default<&Material::poisson_ratio>()},
@@ -56,6 +57,15 @@ constexpr Key material_keys[] = {
      .example = "5e-4",
      .show = Show::commented,
      .bind = field<&Material::yield_stretch>()},
+    {.name = "elongation_limit",
+     .type = Type::number,
+     .doc = "virtual fibres with damage: plastic elongation δ_e at which an arm fails "
+            "(Olsson et al. 2021, eq. 118)",
+     .unit = "m",
+     .range = positive,
+     .example = "4e-5",
+     .show = Show::commented,
+     .bind = field<&Material::elongation_limit>()},
     {.name = "stiffness_factor",
      .type = Type::number,
      .doc = "multiplies the micromodulus (deliberately stiff regions)",
@@ -115,7 +125,8 @@ void read_materials(Reader& r, ModelSpec& model, Marks& marks) {
     Material mat;
     mat.name = key.Scalar();
     r.read_bound(f, mat);
-    if (f.has("poisson_ratio")) {
+    // The fibre model honours ν (physics/fibres.hpp); bond-based PD cannot.
+    if (f.has("poisson_ratio") && model.effects.bond_model == BondModel::micro_elastic) {
       warn_unrepresented_poisson_ratio(r, f, model.dimension, mat.poisson_ratio);
     }
     model.materials.push_back(std::move(mat));

@@ -66,6 +66,7 @@ struct Marks {
   Fields lattice;
   Fields solver;
   Fields output;
+  Fields model;
   std::vector<YAML::Node> material_nodes; ///< the name of each material
   std::vector<Fields> material_fields;
   std::vector<std::vector<YAML::Node>> body_box_nodes; ///< per body, per box
@@ -107,6 +108,8 @@ void check_unique(const Reader& r, std::map<std::string, YAML::Node>& seen, cons
 /// Checks between sections that need no lattice: effects against materials and solver, solver
 /// options against each other, output against probes.
 void check_consistency(Reader& r, const Scene& scene, const Marks& marks);
+/// What the virtual-fibre model cannot run with (model_options.cpp).
+void check_bond_model(Reader& r, const Scene& scene, const Marks& marks);
 /// Checks against the lattice, from the estimate of its size first, then by counting lattice
 /// points in regions, last (mirror supports) by generating it: the particles, if generated.
 std::optional<ParticleSet> check_against_lattice(Reader& r, const Scene& scene, const Marks& marks);

@@ -117,12 +117,12 @@ Scene read_scene(const YAML::Node& root, Reader& r) {
   Marks marks;
   read_top_level(root, r, scene, marks);
   read_lattice(r, scene.model, marks);
+  read_model_options(r, scene.model, marks); // first: the bond model decides what ν means
   read_materials(r, scene.model, marks);
   read_bodies(r, scene.model, marks);
   read_supports(r, scene.model, marks);
   read_loads(r, scene.model, marks);
   read_cracks(r, scene.model, marks);
-  read_model_options(r, scene.model, marks);
   read_solver(r, scene.solver, scene.stop_when, marks);
   read_initial(r, scene.initial, marks);
   read_probes(r, scene.probes, marks);

@@ -1,0 +1,36 @@
+// Particle files: a body given as a list of particles (discretisation/point_cloud.hpp).
+//
+// CSV with a header row naming the columns, in any order (unknown columns are ignored):
+//   x, y[, z]          position [m] (z required in 3D, not read in 2D)
+//   volume             [m³], or instead both
+//   mass, density      [kg], [kg/m³]: volume = mass/density
+//   h                  optional particle size [m] (default: eq. 115 from the neighbours)
+// Empty lines and lines starting with '#' are skipped. Every value must be a finite number;
+// volumes and sizes positive; no two particles at the same position. A problem is reported as
+// "FILE:ROW: what" with the row counted from 1 at the header line.
+#pragma once
+
+#include "libpd/discretisation/point_cloud.hpp"
+
+#include <cstddef>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+
+namespace pd {
+
+class ParticleFileError : public std::runtime_error {
+public:
+  using std::runtime_error::runtime_error;
+};
+
+/// Largest particle file read [bytes].
+inline constexpr std::size_t max_particle_file_bytes = std::size_t{1} << 30;
+
+/// Parse the CSV text of a particle file named `name` (for messages) in dimension `dim`.
+PointCloud parse_particle_csv(std::string_view text, const std::string& name, int dim);
+
+/// Read and parse the file at `path`.
+PointCloud read_particle_csv(const std::string& path, int dim);
+
+} // namespace pd

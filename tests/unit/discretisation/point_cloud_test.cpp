@@ -1,0 +1,226 @@
+// Particle sets beyond the lattice (issue 17, item 3): sizes from the nearest neighbours
+// (eq. 115), the arms of particles with their own horizons, and the fibre model's patch test on
+// irregular, graded particles.
+#include "libpd/discretisation/model.hpp"
+#include "libpd/discretisation/point_cloud.hpp"
+#include "libpd/kernel/force_kernel.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <gtest/gtest.h>
+#include <limits>
+#include <random>
+#include <vector>
+
+namespace {
+
+TEST(PointCloud, SizesAreHalfTheMeanDistanceToTheNearestNeighbours) {
+  // Square lattice of spacing s: 4 neighbours at s, the fifth at √2 s (eq. 115, n = 5).
+  const double s = 0.1;
+  std::vector<pd::Vec3> p;
+  for (int j = 0; j < 9; ++j) {
+    for (int i = 0; i < 9; ++i) {
+      p.push_back({i * s, j * s, 0});
+    }
+  }
+  const auto h = pd::sizes_from_neighbours(p, 2, 5);
+  EXPECT_NEAR(h[4 * 9 + 4], (4 * s + std::sqrt(2.0) * s) / 10, 1e-15);
+  // A corner: 2 at s, 1 at √2 s, 2 at 2s.
+  EXPECT_NEAR(h[0], (2 * s + std::sqrt(2.0) * s + 4 * s) / 10, 1e-15);
+}
+
+TEST(PointCloud, ArmsJoinPairsInsideEitherHorizonInBothDirections) {
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u(0, 1);
+  std::vector<pd::Vec3> p(400);
+  std::vector<double> horizon(p.size());
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    p[i] = {u(rng), u(rng), u(rng)};
+    horizon[i] = 0.05 + 0.15 * u(rng);
+  }
+  const pd::BondFamily f = pd::variable_horizon_family(p, 3, horizon);
+  std::size_t expected = 0;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    std::size_t row = 0;
+    for (std::size_t j = 0; j < p.size(); ++j) {
+      const double d = std::sqrt((p[i][0] - p[j][0]) * (p[i][0] - p[j][0]) +
+                                 (p[i][1] - p[j][1]) * (p[i][1] - p[j][1]) +
+                                 (p[i][2] - p[j][2]) * (p[i][2] - p[j][2]));
+      row += (j != i && d <= std::max(horizon[i], horizon[j])) ? 1 : 0;
+    }
+    EXPECT_EQ(f.family_size(i), row) << "particle " << i;
+    expected += row;
+  }
+  EXPECT_EQ(f.directed_bond_count(), expected);
+  const auto reverse = pd::reverse_bond_index(f);
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    for (std::size_t k = f.offsets[i]; k < f.offsets[i + 1]; ++k) {
+      EXPECT_EQ(f.neighbour[reverse[k]], i);
+    }
+  }
+}
+
+} // namespace
+
+namespace {
+
+constexpr double E = 200e9;
+constexpr double nu = 0.3;
+using Matrix = std::array<std::array<double, 3>, 3>;
+
+/// A plate [0, 1] × [0, 0.5] (plane strain) of columns whose spacing grows ten-fold along x,
+/// s(x) = s0 10^x, each column filled with its own spacing (so neighbouring columns do not
+/// match), every point jittered by up to ±`jitter` s, volume s².
+pd::ParticleSet graded_plate(double s0, double jitter, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(-1, 1);
+  pd::ParticleSet ps;
+  for (double x = 0.5 * s0; x < 1.0;) {
+    const double s = s0 * std::pow(10.0, x);
+    const auto rows = static_cast<int>(std::floor(0.5 / s));
+    const double dy = 0.5 / rows;
+    for (int r = 0; r < rows; ++r) {
+      ps.position.push_back({x + jitter * s * u(rng), (r + 0.5) * dy + jitter * s * u(rng), 0});
+      ps.volume.push_back(s * dy);
+      ps.material.push_back(0);
+      ps.body.push_back(0);
+      ps.particle_size.push_back(std::numeric_limits<double>::quiet_NaN());
+    }
+    x += s;
+  }
+  return ps;
+}
+
+pd::ModelSpec fibre_spec(pd::VolumeCorrection volume) {
+  pd::ModelSpec s;
+  s.volume_correction = volume;
+  s.dimension.dim = 2;
+  s.dimension.plane = pd::PlaneMode::plane_strain;
+  s.lattice.spacing = 0.01; // not used by point-cloud particles
+  s.effects.bond_model = pd::BondModel::virtual_fibres;
+  pd::Material m;
+  m.youngs_modulus = E;
+  m.poisson_ratio = nu;
+  m.density = 7800;
+  s.materials.push_back(m);
+  pd::BodySpec b;
+  b.region.boxes = {pd::Box{{0, 0, 0}, {1, 0.5, 0}}};
+  s.bodies.push_back(b);
+  return s;
+}
+
+struct PatchResult {
+  std::size_t interior = 0;
+  double stress_error = 0; ///< max over interior particles of max |σ_i − σ| / max |σ|
+  double force = 0;        ///< max over interior particles of |b_i| h_i / max |σ|
+  double mean_force_x = 0; ///< mean over interior particles of b_x h_i / max |σ| (signed)
+  double size_ratio = 0;   ///< largest h over smallest h
+};
+
+PatchResult patch(const pd::ParticleSet& ps, pd::VolumeCorrection volume) {
+  pd::Model m = pd::build_model(fibre_spec(volume), ps);
+  const double e = 1e-6;
+  Matrix eps{};
+  eps[0][0] = e;
+  eps[1][1] = -0.3 * e;
+  eps[0][1] = eps[1][0] = 0.4 * e;
+  std::vector<double> y(3 * m.size());
+  for (std::size_t i = 0; i < m.size(); ++i) {
+    const auto& x = m.particles.position[i];
+    for (std::size_t a = 0; a < 3; ++a) {
+      y[3 * i + a] = x[a] + eps[a][0] * x[0] + eps[a][1] * x[1];
+    }
+  }
+  // Plane strain continuum: σ = 2Gε + (K − G) tr ε I, K of eq. 81.
+  const double G = E / (2 * (1 + nu)), K = E / (2 * (1 - 2 * nu) * (1 + nu));
+  Matrix sigma{};
+  for (int a = 0; a < 2; ++a) {
+    for (int b = 0; b < 2; ++b) {
+      sigma[a][b] = 2 * G * eps[a][b] + (a == b ? (K - G) * (eps[0][0] + eps[1][1]) : 0.0);
+    }
+  }
+  const double scale =
+      std::max({std::abs(sigma[0][0]), std::abs(sigma[1][1]), std::abs(sigma[0][1])});
+  std::vector<double> b(3 * m.size());
+  pd::make_force_evaluator(m)->compute(y.data(), b.data());
+  const pd::FibreArms& arms = m.fibre_arms;
+  const auto& f = m.family;
+  const auto h = pd::fibre_particle_sizes(m.spec.lattice, m.spec.fibre_kernel, m.particles, 2);
+  PatchResult r;
+  r.size_ratio = *std::max_element(h.begin(), h.end()) / *std::min_element(h.begin(), h.end());
+  for (std::size_t i = 0; i < m.size(); ++i) {
+    const auto& x = m.particles.position[i];
+    const double reach = 3 * m.spec.fibre_kernel.alpha * h[i];
+    if (std::min({x[0], 1 - x[0], x[1], 0.5 - x[1]}) < reach) {
+      continue;
+    }
+    ++r.interior;
+    // The stress of i's own half-arms (eq. 36 summed as in the virial), with ε̄ of eq. 73.
+    double mean = 0;
+    Matrix s{};
+    std::vector<std::array<double, 4>> arm; // dx, dy, r, strain
+    for (std::size_t k = f.offsets[i]; k < f.offsets[i + 1]; ++k) {
+      const std::size_t j = f.neighbour[k];
+      const double dx = y[3 * j] - y[3 * i], dy = y[3 * j + 1] - y[3 * i + 1];
+      const double len = std::sqrt(dx * dx + dy * dy);
+      const double strain = len * f.inverse_length[k] - 1;
+      mean += arms.own[k] / f.inverse_length[k] * strain / 2;
+      arm.push_back({dx, dy, len, strain});
+    }
+    std::size_t a = 0;
+    for (std::size_t k = f.offsets[i]; k < f.offsets[i + 1]; ++k, ++a) {
+      const auto [dx, dy, len, strain] = arm[a];
+      const double S = arms.shear[i] * strain + arms.volumetric[i] * mean;
+      const double d[2] = {dx, dy};
+      for (int p = 0; p < 2; ++p) {
+        for (int q = 0; q < 2; ++q) {
+          s[p][q] += arms.own[k] * S * d[p] * d[q] / len;
+        }
+      }
+    }
+    for (int p = 0; p < 2; ++p) {
+      for (int q = 0; q < 2; ++q) {
+        r.stress_error = std::max(r.stress_error, std::abs(s[p][q] - sigma[p][q]) / scale);
+      }
+    }
+    r.force = std::max(r.force, std::hypot(b[3 * i], b[3 * i + 1]) * h[i] / scale);
+    r.mean_force_x += b[3 * i] * h[i] / scale;
+  }
+  r.mean_force_x /= static_cast<double>(std::max<std::size_t>(r.interior, 1));
+  return r;
+}
+
+TEST(FibrePatchTest, InteriorStressIsTheContinuumsOnIrregularGradedParticles) {
+  // Issue 17's patch test: sizes varying more than ten-fold, columns that do not match, points
+  // jittered by ±0.15 s. With the per-particle moment weights (volume_correction other than
+  // none, the scenes' default) every interior particle carries the continuum's stress; with the
+  // kernel weights alone the arrangement shows (measured 2026-11-25: 10 % graded, 21 % jittered).
+  const PatchResult r = patch(graded_plate(0.004, 0.15, 1), pd::VolumeCorrection::moment);
+  EXPECT_GE(r.size_ratio, 10.0);
+  EXPECT_GE(r.interior, 1000U);
+  EXPECT_LT(r.stress_error, 0.01);
+  const PatchResult plain = patch(graded_plate(0.004, 0.15, 1), pd::VolumeCorrection::none);
+  EXPECT_GT(plain.stress_error, 0.05); // the weights are what makes the difference
+  // Not met: "no spurious forces". The arm forces at an interior particle do not cancel on an
+  // irregular set (an odd moment, which even-moment weights cannot touch), and on a graded set the
+  // imbalance is systematic: each end weights an arm with its own kernel (eq. 70), and the
+  // neighbours' kernels are not symmetric about i where h varies, so the mean force points along
+  // ∇h (SPH's missing grad-h terms). Measured (2026-11-25): max |b_i| h_i/|σ| = 0.20, mean
+  // b_x h/|σ| = −0.033 with jitter; 0.14 and the same mean without. A plate of this grading, held
+  // at its fine end and pulled at the coarse one, shows the displacement decaying exponentially
+  // away from the load instead of growing linearly.
+  RecordProperty("spurious_force_h_over_sigma", std::to_string(r.force));
+  RecordProperty("mean_force_x_h_over_sigma", std::to_string(r.mean_force_x));
+  std::printf("graded irregular plate: h ratio %.1f, %zu interior particles, stress error %.2e, "
+              "max |b| h/|σ| = %.3f, mean b_x h/|σ| = %+.3f (kernel weights alone: stress "
+              "error %.3f)\n",
+              r.size_ratio, r.interior, r.stress_error, r.force, r.mean_force_x,
+              plain.stress_error);
+  const PatchResult regular = patch(graded_plate(0.004, 0.0, 1), pd::VolumeCorrection::moment);
+  std::printf("without jitter: max |b| h/|σ| = %.3f, mean b_x h/|σ| = %+.3f\n", regular.force,
+              regular.mean_force_x);
+}
+
+} // namespace
