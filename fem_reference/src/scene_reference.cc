@@ -1,0 +1,437 @@
+// pd-fem --scene: a libpd scene's linear-elastic continuum problem in deal.II.
+//
+// The body is the union of the scene's body boxes, less the regions of mirror supports (their
+// particles stand behind the clamp plane; the continuum body ends on it) and less each region's
+// `minus` shapes. In the default cell-centred lattice the particles' volumes tile the boxes, so
+// the FE body is the boxes themselves:
+//
+//     -div σ(u) = b      in Ω,        σ = λ tr ε I + 2 μ ε   (λ → λ* in plane stress),
+//     u_c = g_c          on the nodes of fixed / displacement supports (component c),
+//     u = 0              on the clamp plane of a mirror support,
+//     σ n = 0            elsewhere on ∂Ω,
+//
+// with b the loads as PD applies them: a resultant F shared among the particles a load selects
+// in proportion to their volumes is the density F/V on the union of their lattice cells (V its
+// volume, times the thickness in 2D); a `body` load is its density on the same cells.
+//
+// The mesh is a tensor-product grid whose lines contain every box face of bodies, supports and
+// loaded cells, subdivided to a target size, with the cells outside Ω removed; each level
+// refines it globally (h, h/2, h/4, ...), so Richardson extrapolation with ratio 2 applies.
+// Probes read what PD reads: the mean of a displacement component over the particles libpd
+// resolves for the probe (evaluated at their positions), or a support's reaction, the sum of
+// the residual K u - f over the dofs it constrains.
+#include "scene_reference.h"
+
+#include "elastic_common.h"
+#include "report.h"
+
+#include <chrono>
+#include <cmath>
+#include <deal.II/base/quadrature_lib.h>
+#include <deal.II/dofs/dof_tools.h>
+#include <deal.II/fe/fe_q.h>
+#include <deal.II/fe/fe_values.h>
+#include <deal.II/fe/mapping_q1.h>
+#include <deal.II/grid/grid_generator.h>
+#include <deal.II/lac/dynamic_sparsity_pattern.h>
+#include <deal.II/numerics/fe_field_function.h>
+#include <iomanip>
+#include <iostream>
+#include <map>
+#include <set>
+
+namespace pdfem {
+namespace {
+double seconds_since(const std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+template <int dim>
+pd::Vec3 to_vec3(const Point<dim>& p) {
+  pd::Vec3 v{0, 0, 0};
+  for (unsigned int d = 0; d < dim; ++d)
+    v[d] = p[d];
+  return v;
+}
+
+template <int dim>
+Point<dim> to_point(const pd::Vec3& v) {
+  Point<dim> p;
+  for (unsigned int d = 0; d < dim; ++d)
+    p[d] = v[d];
+  return p;
+}
+
+const char* component_name(const int c) {
+  return c == 0 ? "x" : c == 1 ? "y" : "z";
+}
+
+// Why: the level-0 target size is the smallest side of any body box, so the thinnest part of
+// the body gets one cell across and every cell stays close to cubic.
+double base_cell_size(const SceneProblem& problem) {
+  double h = std::numeric_limits<double>::max();
+  for (const pd::BodySpec& b : problem.bodies)
+    for (const pd::Box& box : b.region.boxes)
+      for (int a = 0; a < problem.dim(); ++a)
+        if (box.hi[a] - box.lo[a] > problem.tolerance())
+          h = std::min(h, box.hi[a] - box.lo[a]);
+  return h;
+}
+} // namespace
+
+template <int dim>
+SceneReference<dim>::SceneReference(const SceneProblem& p, const SceneOptions& o)
+    : problem(p), options(o), fe(FE_Q<dim>(2), dim), dof_handler(triangulation) {
+  AssertThrow(p.dim() == dim, ExcMessage("scene of another dimension"));
+  component.resize(fe.n_dofs_per_cell());
+  for (unsigned int i = 0; i < component.size(); ++i)
+    component[i] = fe.system_to_component_index(i).first;
+}
+
+// Why: a tensor-product grid through every box face resolves each body, support and loaded
+// layer exactly; each interval between two faces gets round(length / h) cells. Cells whose
+// centre lies outside Ω (behind a clamp plane, in a box-shaped hole) are removed. Later levels
+// refine globally, which halves every cell.
+template <int dim>
+void SceneReference<dim>::make_grid() {
+  if (triangulation.n_active_cells() > 0) {
+    triangulation.refine_global(1);
+    return;
+  }
+  base_size = base_cell_size(problem);
+  std::vector<std::vector<double>> steps(dim);
+  Point<dim> lo, hi;
+  for (unsigned int a = 0; a < dim; ++a) {
+    const std::vector<double>& planes = problem.planes[a];
+    lo[a] = planes.front();
+    hi[a] = planes.back();
+    for (std::size_t k = 0; k + 1 < planes.size(); ++k) {
+      const double length = planes[k + 1] - planes[k];
+      const long n = std::max(1L, std::lround(length / base_size));
+      for (long i = 0; i < n; ++i)
+        steps[a].push_back(length / static_cast<double>(n));
+    }
+  }
+  Triangulation<dim> box;
+  GridGenerator::subdivided_hyper_rectangle(box, steps, lo, hi, false);
+  std::set<typename Triangulation<dim>::active_cell_iterator> outside;
+  for (const auto& cell : box.active_cell_iterators())
+    if (!problem.in_domain(to_vec3(cell->center())))
+      outside.insert(cell);
+  if (outside.size() == box.n_active_cells())
+    throw std::runtime_error("the scene's continuum body is empty (every cell lies behind a "
+                             "mirror support or in a hole)");
+  if (outside.empty())
+    triangulation.copy_triangulation(box);
+  else
+    GridGenerator::create_triangulation_with_removed_cells(box, outside, triangulation);
+}
+
+// Why: the default sequence ends at the last level whose Q2 system stays within a budget of
+// unknowns (3D 3e5, 2D 6e5: a minute or two on one core), with at least three levels for
+// Richardson extrapolation; --coarse runs three levels, --levels N exactly N.
+template <int dim>
+unsigned int SceneReference<dim>::choose_levels() const {
+  if (options.levels > 0)
+    return options.levels;
+  if (options.coarse)
+    return 3;
+  const double budget = dim == 3 ? 3e5 : 6e5;
+  const double dofs0 = dim * std::pow(2., dim) * triangulation.n_active_cells();
+  unsigned int n = 1;
+  while (n < 8 && dofs0 * std::pow(2., dim * n) <= budget)
+    ++n;
+  return std::max(3u, n);
+}
+
+// Why: supports become constraints on the dofs whose support points they hold. A fixed or
+// displacement support holds the nodes in its region (closed, tolerance 1e-6 λ); a mirror
+// support clamps u = 0 on its plane's face of Ω, within the support's extent across the plane.
+// A later support overrides an earlier one on the same dof, as in libpd.
+template <int dim>
+void SceneReference<dim>::setup_system() {
+  dof_handler.distribute_dofs(fe);
+  const auto n = dof_handler.n_dofs();
+  std::vector<Point<dim>> points(n);
+  DoFTools::map_dofs_to_support_points(MappingQ1<dim>(), dof_handler, points);
+  dof_component.assign(n, 0);
+  std::vector<types::global_dof_index> dofs(fe.n_dofs_per_cell());
+  for (const auto& cell : dof_handler.active_cell_iterators()) {
+    cell->get_dof_indices(dofs);
+    for (unsigned int i = 0; i < dofs.size(); ++i)
+      dof_component[dofs[i]] = component[i];
+  }
+
+  const double tol = problem.tolerance();
+  std::map<types::global_dof_index, double> value;
+  support_dofs.assign(problem.supports.size(), {});
+  for (std::size_t s = 0; s < problem.supports.size(); ++s) {
+    const pd::SupportSpec& sup = problem.supports[s];
+    for (types::global_dof_index i = 0; i < n; ++i) {
+      const pd::Vec3 p = to_vec3(points[i]);
+      const unsigned int c = dof_component[i];
+      if (!sup.region.contains(p, dim, tol))
+        continue;
+      bool held = false;
+      double g = 0.;
+      for (unsigned int a = 0; a < dim; ++a)
+        if (sup.mirror[a] && std::abs(p[a] - sup.mirror_at[a]) <= tol)
+          held = true;
+      if (sup.prescribed[c]) {
+        held = true;
+        g = sup.displacement[c];
+      } else if (sup.fixed[c])
+        held = true;
+      if (held) {
+        value[i] = g;
+        support_dofs[s].push_back(i);
+      }
+    }
+    if (support_dofs[s].empty())
+      throw std::runtime_error("support '" + sup.name + "' holds no node of the FE mesh");
+  }
+
+  constraints.clear();
+  for (const auto& [dof, g] : value) {
+    constraints.add_line(dof);
+    constraints.set_inhomogeneity(dof, g);
+  }
+  constraints.close();
+
+  DynamicSparsityPattern dsp(n);
+  DoFTools::make_sparsity_pattern(dof_handler, dsp, constraints, false);
+  const IndexSet all_dofs = complete_index_set(n);
+  system_matrix.reinit(all_dofs, all_dofs, dsp, MPI_COMM_WORLD);
+  system_rhs.reinit(all_dofs, MPI_COMM_WORLD);
+  solution.reinit(n);
+}
+
+// Why: PD conserves each load's resultant exactly, so the density F/V uses the volume V of the
+// loaded cells as this mesh integrates it (the same number as the particles' volumes when the
+// mesh resolves the cells, which the grid planes ensure for box regions). In 2D the problem is
+// per unit thickness t: V = area · t.
+template <int dim>
+void SceneReference<dim>::measure_loads() {
+  const QGauss<dim> quadrature(fe.degree + 1);
+  FEValues<dim> fv(fe, quadrature, update_quadrature_points | update_JxW_values);
+  std::vector<double> volume(problem.loads.size(), 0.);
+  for (const auto& cell : dof_handler.active_cell_iterators()) {
+    fv.reinit(cell);
+    for (const unsigned int q : fv.quadrature_point_indices())
+      for (std::size_t l = 0; l < problem.loads.size(); ++l)
+        if (problem.loads[l].cells.contains(to_vec3(fv.quadrature_point(q))))
+          volume[l] += fv.JxW(q);
+  }
+  const double thickness = dim == 2 ? problem.dimension.thickness : 1.;
+  load_density.assign(problem.loads.size(), Tensor<1, dim>());
+  for (std::size_t l = 0; l < problem.loads.size(); ++l) {
+    const SceneLoad& load = problem.loads[l];
+    if (volume[l] <= 0.)
+      throw std::runtime_error("load '" + load.name + "': its cells hold no part of the body");
+    for (unsigned int c = 0; c < dim; ++c)
+      load_density[l][c] = load.density ? load.value[c] : load.value[c] / (volume[l] * thickness);
+  }
+}
+
+// Why: one cell's stiffness (elastic_common.h, with the Lamé constants of the body that holds
+// the cell's centre, E scaled by the material's stiffness factor as PD scales c) and its load
+// vector ∫ b·φ_i over the quadrature points inside each load's cells.
+template <int dim>
+void SceneReference<dim>::cell_system(const typename DoFHandler<dim>::active_cell_iterator& cell,
+                                      FEValues<dim>& fv, FullMatrix<double>& cell_matrix,
+                                      Vector<double>& cell_rhs) const {
+  const unsigned int n = fe.n_dofs_per_cell();
+  cell_matrix.reinit(n, n);
+  cell_rhs.reinit(n);
+  fv.reinit(cell);
+  const int body = problem.body_at(to_vec3(cell->center()));
+  const pd::Material& m =
+      problem.materials.at(static_cast<std::size_t>(problem.bodies.at(body).material));
+  const LameConstants lame = lame_constants(m.youngs_modulus * m.stiffness_factor, m.poisson_ratio,
+                                            problem.plane_stress());
+  std::vector<Tensor<1, dim>> grad;
+  add_elastic_cell_matrix(fv, component, lame, grad, cell_matrix);
+  for (const unsigned int q : fv.quadrature_point_indices()) {
+    const pd::Vec3 x = to_vec3(fv.quadrature_point(q));
+    for (std::size_t l = 0; l < problem.loads.size(); ++l)
+      if (problem.loads[l].cells.contains(x))
+        for (unsigned int i = 0; i < n; ++i)
+          cell_rhs(i) += fv.shape_value_component(i, q, component[i]) *
+                         load_density[l][component[i]] * fv.JxW(q);
+  }
+}
+
+template <int dim>
+void SceneReference<dim>::assemble_system() {
+  measure_loads();
+  const QGauss<dim> quadrature(fe.degree + 1);
+  FEValues<dim> fv(fe, quadrature,
+                   update_values | update_gradients | update_quadrature_points | update_JxW_values);
+  FullMatrix<double> cell_matrix;
+  Vector<double> cell_rhs;
+  std::vector<types::global_dof_index> dofs(fe.n_dofs_per_cell());
+  for (const auto& cell : dof_handler.active_cell_iterators()) {
+    cell_system(cell, fv, cell_matrix, cell_rhs);
+    cell->get_dof_indices(dofs);
+    constraints.distribute_local_to_global(cell_matrix, cell_rhs, dofs, system_matrix, system_rhs);
+  }
+  system_matrix.compress(VectorOperation::add);
+  system_rhs.compress(VectorOperation::add);
+}
+
+template <int dim>
+void SceneReference<dim>::solve() {
+  Point<dim> centre;
+  for (unsigned int a = 0; a < dim; ++a)
+    centre[a] = (problem.bounding_box.lo[a] + problem.bounding_box.hi[a]) / 2;
+  const CgStatistics stats = solve_elasticity(dof_handler, system_matrix, system_rhs, constraints,
+                                              centre, "AMG", 1e-10, 10000, solution);
+  levels.back().iterations = stats.iterations;
+}
+
+// Why: the force a support exerts on the body is what equilibrium lacks without it: at its
+// dofs K u = f + R, so R = K u - f, summed over the dofs of the probe's component (in 2D times
+// the thickness: the FE problem is per unit thickness, PD's forces are in N).
+template <int dim>
+double SceneReference<dim>::reaction(const SceneProbe& probe) const {
+  const QGauss<dim> quadrature(fe.degree + 1);
+  FEValues<dim> fv(fe, quadrature,
+                   update_values | update_gradients | update_quadrature_points | update_JxW_values);
+  std::set<types::global_dof_index> wanted;
+  for (const auto i : support_dofs.at(probe.support))
+    if (dof_component[i] == static_cast<unsigned int>(probe.component))
+      wanted.insert(i);
+  if (wanted.empty())
+    throw std::runtime_error("reaction probe '" + probe.name + "': support '" +
+                             problem.supports.at(probe.support).name + "' does not hold " +
+                             component_name(probe.component));
+  FullMatrix<double> cell_matrix;
+  Vector<double> cell_rhs;
+  const unsigned int n = fe.n_dofs_per_cell();
+  Vector<double> u(n), r(n);
+  std::vector<types::global_dof_index> dofs(n);
+  double sum = 0.;
+  for (const auto& cell : dof_handler.active_cell_iterators()) {
+    cell->get_dof_indices(dofs);
+    if (std::none_of(dofs.begin(), dofs.end(), [&](auto i) { return wanted.count(i) > 0; }))
+      continue;
+    cell_system(cell, fv, cell_matrix, cell_rhs);
+    cell->get_dof_values(solution, u);
+    cell_matrix.vmult(r, u);
+    for (unsigned int i = 0; i < n; ++i)
+      if (wanted.count(dofs[i]))
+        sum += r(i) - cell_rhs(i);
+  }
+  return dim == 2 ? sum * problem.dimension.thickness : sum;
+}
+
+template <int dim>
+void SceneReference<dim>::evaluate_probes() {
+  Functions::FEFieldFunction<dim> field(dof_handler, solution);
+  auto& values = levels.back().values;
+  for (const SceneProbe& probe : problem.probes) {
+    if (probe.quantity == SceneProbe::Quantity::reaction) {
+      values.push_back(reaction(probe));
+      continue;
+    }
+    std::vector<Point<dim>> points;
+    for (const pd::Vec3& x : probe.points)
+      points.push_back(to_point<dim>(x));
+    std::vector<Vector<double>> u(points.size(), Vector<double>(dim));
+    field.vector_value_list(points, u);
+    double sum = 0.;
+    for (const auto& v : u)
+      sum += v[probe.component];
+    values.push_back(sum / static_cast<double>(u.size()));
+  }
+}
+
+// Why: fe.json is what `pd verify` reads beside the PD run: per level the mesh and time, per
+// probe the values of every level, the best estimate (Richardson-extrapolated when the last
+// three levels are in the asymptotic range, else the finest value), its estimated error
+// |extrapolated - finest| (or the last difference) and the observed order.
+template <int dim>
+void SceneReference<dim>::output_results(const double wall_time) const {
+  write_atomically(options.output_directory / "fe.json", [&](std::ostream& out) {
+    JsonWriter w(out);
+    w.begin_object();
+    w.value("scene", problem.path);
+    w.value("dimension", dim);
+    w.value("model", problem.model_name());
+    w.value("wall_time_s", wall_time);
+    w.begin_array("levels");
+    for (const SceneLevel& l : levels) {
+      w.begin_object();
+      w.value("cells", l.cells);
+      w.value("dofs", static_cast<unsigned long>(l.dofs));
+      w.value("h", l.h);
+      w.value("seconds", l.seconds);
+      w.end_object();
+    }
+    w.end_array();
+    w.begin_array("probes");
+    for (std::size_t k = 0; k < problem.probes.size(); ++k) {
+      const SceneProbe& probe = problem.probes[k];
+      std::vector<double> values;
+      for (const SceneLevel& l : levels)
+        values.push_back(l.values[k]);
+      const Richardson r = richardson(values, 2.);
+      w.begin_object();
+      w.value("name", probe.name);
+      w.value("quantity",
+              probe.quantity == SceneProbe::Quantity::reaction ? "reaction" : "displacement");
+      w.value("component", component_name(probe.component));
+      w.begin_array("values");
+      for (const double v : values)
+        w.value("", v);
+      w.end_array();
+      w.value("value", r.extrapolated);
+      w.value("error_estimate", r.error_estimate);
+      w.value("observed_order", r.order);
+      w.end_object();
+    }
+    w.end_array();
+    w.end_object();
+  });
+}
+
+template <int dim>
+void SceneReference<dim>::run() {
+  const auto t_start = std::chrono::steady_clock::now();
+  unsigned int n_levels = 0;
+  for (unsigned int level = 0; level == 0 || level < n_levels; ++level) {
+    const auto t0 = std::chrono::steady_clock::now();
+    make_grid();
+    if (level == 0)
+      n_levels = choose_levels();
+    levels.emplace_back();
+    SceneLevel& l = levels.back();
+    setup_system();
+    l.cells = triangulation.n_active_cells();
+    l.dofs = dof_handler.n_dofs();
+    l.h = base_size / std::pow(2., level);
+    assemble_system();
+    solve();
+    evaluate_probes();
+    l.seconds = seconds_since(t0);
+    std::cerr << "[" << std::filesystem::path(problem.path).stem().string() << "] level " << level
+              << "/" << n_levels - 1 << ": " << l.cells << " cells, " << l.dofs
+              << " dofs, h = " << std::setprecision(4) << l.h << " m, " << l.iterations
+              << " CG its, " << std::setprecision(3) << l.seconds << " s;";
+    for (std::size_t k = 0; k < problem.probes.size(); ++k)
+      std::cerr << " " << problem.probes[k].name << " = " << std::setprecision(8) << l.values[k];
+    std::cerr << std::endl;
+  }
+  output_results(seconds_since(t_start));
+}
+
+void solve_scene(const SceneProblem& problem, const SceneOptions& options) {
+  if (problem.dim() == 2)
+    SceneReference<2>(problem, options).run();
+  else
+    SceneReference<3>(problem, options).run();
+}
+
+template class SceneReference<2>;
+template class SceneReference<3>;
+} // namespace pdfem

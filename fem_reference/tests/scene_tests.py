@@ -1,0 +1,109 @@
+#!/usr/bin/env python3
+"""Tests of `pd-fem --scene`: each checks fe.json against a closed form or against the other FE
+path (the .prm solver), never against stored numbers.
+
+    scene_tests.py CASE --pd-fem BIN --source FEM_REFERENCE_DIR --work DIR
+
+CASE
+  cantilever  verification/scenes/cantilever.yaml (3 levels) against prm/cantilever.prm
+              (3 levels) evaluated at the four particles the scene's tip probe averages over:
+              the extrapolated values must agree within 1.5 x the sum of both error estimates
+              (the scene loads the top particle layer as a body force, the .prm the top face
+              by a traction: their difference, ~0.03 %, is below the estimates at 3 levels).
+  bar-2d      tests/scenes/bar-2d.yaml: a plane-stress bar (nu = 0) in tension, exact for Q2.
+Exit 0 on success, 1 with a message naming the failing check.
+"""
+import argparse
+import json
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+
+def run(cmd):
+    print("+", " ".join(str(c) for c in cmd), flush=True)
+    subprocess.run([str(c) for c in cmd], check=True)
+
+
+def fe_json(path):
+    with open(path) as f:
+        return json.load(f)
+
+
+def probe(fe, name):
+    for p in fe["probes"]:
+        if p["name"] == name:
+            return p
+    raise KeyError(name)
+
+
+def check(ok, what):
+    print(("PASS " if ok else "FAIL ") + what, flush=True)
+    return ok
+
+
+def cantilever(args):
+    repo = args.source.parent
+    out = args.work / "scene-cantilever"
+    run([args.pd_fem, "--scene", repo / "verification/scenes/cantilever.yaml", "--coarse",
+         "-o", out])
+    scene = probe(fe_json(out / "fe.json"), "tip_deflection")
+
+    # The tip probe averages the particles at x = L - λ/2, y = b/2 ± λ/2, z = h/2 ± λ/2
+    # (λ = 0.05): the .prm solution at those four points, loaded as the .prm loads the beam.
+    points = "; ".join(f"p{i}: 3.475, {y}, {z}" for i, (y, z) in
+                       enumerate([(0.125, 0.175), (0.175, 0.175), (0.125, 0.225), (0.175, 0.225)]))
+    prm = (args.source / "prm/cantilever.prm").read_text()
+    prm = re.sub(r"set Quantities of interest *=.*", f"set Quantities of interest = {points}", prm)
+    prm = re.sub(r"set Sample lines *=.*", "set Sample lines = ", prm)
+    prm = re.sub(r"set Write VTU *=.*", "set Write VTU = false", prm)
+    args.work.mkdir(parents=True, exist_ok=True)
+    prm_file = args.work / "cantilever-particles.prm"
+    prm_file.write_text(prm)
+    run([args.pd_fem, prm_file, "--coarse", "-o", args.work / "prm-cantilever-particles"])
+    summary = fe_json(args.work / "prm-cantilever-particles/summary.json")
+    q = [summary["quantities"][f"p{i}"] for i in range(4)]
+    prm_value = -sum(x["extrapolated"] for x in q) / 4  # deflection = -u_z
+    prm_error = max(x["error_estimate"] for x in q)
+
+    diff = abs(scene["value"] - prm_value)
+    allowed = 1.5 * (scene["error_estimate"] + prm_error)
+    return check(diff <= allowed,
+                 f"cantilever tip u_z: scene {scene['value']:.8e} (est. error "
+                 f"{scene['error_estimate']:.2e}), .prm {prm_value:.8e} (est. error "
+                 f"{prm_error:.2e}); |diff| {diff:.2e} ({100 * diff / abs(prm_value):.3f} %), "
+                 f"allowed {allowed:.2e}")
+
+
+def bar_2d(args):
+    out = args.work / "scene-bar-2d"
+    run([args.pd_fem, "--scene", args.source / "tests/scenes/bar-2d.yaml", "--coarse", "-o", out])
+    fe = fe_json(out / "fe.json")
+    E, H, t, L, lam, F = 200e9, 0.2, 0.1, 2.0, 0.05, 1e6
+    strain = F / (E * H * t)
+    expected = {"end": strain * (L - lam + 3 * lam / 8), "inner": strain * 1.025}
+    ok = check(fe["model"] == "2D plane stress" and fe["dimension"] == 2,
+               f"model {fe['model']!r}, dimension {fe['dimension']}")
+    for name, u in expected.items():
+        p = probe(fe, name)
+        worst = max(abs(v - u) for v in p["values"])
+        ok &= check(worst <= 1e-8 * abs(u),
+                    f"bar {name}: u_x per level {p['values']} vs closed form {u:.10e}")
+    return ok
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("case", choices=["cantilever", "bar-2d"])
+    parser.add_argument("--pd-fem", type=Path, required=True)
+    parser.add_argument("--source", type=Path, required=True, help="fem_reference/ folder")
+    parser.add_argument("--work", type=Path, required=True)
+    args = parser.parse_args()
+    cases = {"cantilever": cantilever, "bar-2d": bar_2d}
+    sys.exit(0 if cases[args.case](args) else 1)
+
+
+if __name__ == "__main__":
+    main()
