@@ -190,11 +190,10 @@ int run_scene(const Arguments& args) {
   pdfem::SceneOptions options;
   options.levels = args.levels > 0 ? static_cast<unsigned int>(args.levels) : 0;
   options.coarse = args.coarse;
-  options.output_directory =
-      args.output_dir.empty()
-          ? std::filesystem::path("fem_reference") / "out" /
-                std::filesystem::path(args.scene_file).stem()
-          : std::filesystem::path(args.output_dir);
+  options.output_directory = args.output_dir.empty()
+                                 ? std::filesystem::path("fem_reference") / "out" /
+                                       std::filesystem::path(args.scene_file).stem()
+                                 : std::filesystem::path(args.output_dir);
   pdfem::solve_scene(problem, options);
   std::printf("%s: output in %s\n", args.scene_file.c_str(),
               (options.output_directory / "fe.json").string().c_str());
