@@ -98,6 +98,7 @@ const char* const usage_text =
     "  --scene FILE       instead: the linear-elastic problem of a libpd scene\n"
     "                     (bodies, supports, loads, probes as PD reads them);\n"
     "                     writes DIR/fe.json (default fem_reference/out/STEM)\n"
+    "  --gmsh             (--scene) mesh with Gmsh even if every shape is a box\n"
     "  -o DIR             output directory (default fem_reference/out/NAME,\n"
     "                     relative to the current directory)\n"
     "  --levels N         number of refinement levels (overrides the file)\n"
@@ -115,6 +116,7 @@ struct Arguments {
   std::string prm_file, output_dir, check_file, scene_file;
   int levels = -1;
   bool coarse = false;
+  bool gmsh = false;
 };
 
 // Compare a run with a stored reference summary.json. Returns true if all
@@ -190,6 +192,7 @@ int run_scene(const Arguments& args) {
   pdfem::SceneOptions options;
   options.levels = args.levels > 0 ? static_cast<unsigned int>(args.levels) : 0;
   options.coarse = args.coarse;
+  options.gmsh = args.gmsh;
   options.output_directory = args.output_dir.empty()
                                  ? std::filesystem::path("fem_reference") / "out" /
                                        std::filesystem::path(args.scene_file).stem()
@@ -246,6 +249,8 @@ int main(int argc, char** argv) {
         args.check_file = need_value(i);
       else if (a == "--scene")
         args.scene_file = need_value(i);
+      else if (a == "--gmsh")
+        args.gmsh = true;
       else if (!a.empty() && a[0] == '-')
         throw std::runtime_error("unknown option '" + a + "'\n" + usage_text);
       else if (args.prm_file.empty())

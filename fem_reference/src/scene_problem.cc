@@ -19,10 +19,11 @@ void add_box_planes(const pd::Box& box, const int dim, std::array<std::vector<do
 }
 
 // Why: PD spreads a load over the particles it selects in proportion to their volumes, i.e. a
-// uniform force density over the union of their cells. The mesh needs planes on the faces of
-// that union: the faces of the bounding box of the cells the load's particles occupy in each
-// box of its region are added (exact for the usual box-shaped loaded layers).
-void add_cell_planes(const LatticeCells& cells, std::array<std::vector<double>, 3>& planes) {
+// uniform force density over the union of their cells. The mesh needs faces on the boundary of
+// that union: the faces of the bounding box of the load's cells are added (exact for the usual
+// box-shaped loaded layers).
+pd::Box cell_bounds(const LatticeCells& cells) {
+  pd::Box box;
   std::array<long long, 3> lo{}, hi{};
   bool first = true;
   for (const auto& c : cells.cells) {
@@ -32,12 +33,21 @@ void add_cell_planes(const LatticeCells& cells, std::array<std::vector<double>, 
     }
     first = false;
   }
-  if (first)
-    return;
   for (int a = 0; a < cells.dim; ++a) {
-    planes[a].push_back(cells.origin[a] + static_cast<double>(lo[a]) * cells.spacing);
-    planes[a].push_back(cells.origin[a] + static_cast<double>(hi[a] + 1) * cells.spacing);
+    box.lo[a] = cells.origin[a] + static_cast<double>(lo[a]) * cells.spacing;
+    box.hi[a] = cells.origin[a] + static_cast<double>(hi[a] + 1) * cells.spacing;
   }
+  return box;
+}
+
+SolidRegion solids_of(const pd::Region& region) {
+  SolidRegion out;
+  for (const pd::Box& box : region.boxes) {
+    Solid s;
+    s.box = box;
+    out.parts.push_back(s);
+  }
+  return out;
 }
 
 // Sorted, without duplicates (closer than `tol`), clipped to [lo, hi].
@@ -200,6 +210,7 @@ SceneProblem read_scene_problem(const std::string& path) {
   std::array<std::vector<double>, 3> planes;
   bool first = true;
   for (const pd::BodySpec& b : spec.bodies) {
+    p.body_solids.push_back(solids_of(b.region));
     for (const pd::Box& box : b.region.boxes) {
       add_box_planes(box, dim, planes);
       for (int a = 0; a < 3; ++a) {
@@ -210,16 +221,21 @@ SceneProblem read_scene_problem(const std::string& path) {
     }
   }
   for (const pd::SupportSpec& s : spec.supports) {
-    for (const pd::Box& box : s.region.boxes)
+    for (const pd::Box& box : s.region.boxes) {
       add_box_planes(box, dim, planes);
-    if (s.mirrors())
+      p.conforming.push_back(box);
+    }
+    if (s.mirrors()) {
       p.removed.push_back(s.region);
+      p.removed_solids.push_back(solids_of(s.region));
+    }
   }
 
   const pd::ParticleSet particles = scene_particles(scene);
   for (const pd::LoadSpec& load : spec.loads) {
     p.loads.push_back(translate_load(spec, particles, load));
-    add_cell_planes(p.loads.back().cells, planes);
+    p.conforming.push_back(cell_bounds(p.loads.back().cells));
+    add_box_planes(p.conforming.back(), dim, planes);
   }
   p.probes = translate_probes(scene, particles, p);
 

@@ -42,6 +42,23 @@ struct SceneProbe {
   std::size_t support = 0;      // reaction: index into SceneProblem::supports
 };
 
+// A solid of the scene's geometry as Gmsh builds it: a box or one of pd::Region's shapes.
+struct Solid {
+  enum class Kind { box, cylinder, sphere, half_space } kind = Kind::box;
+  pd::Box box;                 // box
+  pd::Vec3 centre{0, 0, 0};    // cylinder, sphere: centre; half_space: a point of its plane
+  double radius = 0.;          // cylinder, sphere
+  int axis = 2;                // cylinder: axis direction
+  double length = 0.;          // cylinder: extent along the axis (0: through everything)
+  pd::Vec3 normal{0, 0, 1};    // half_space: the side (p - centre)·normal >= 0
+};
+
+// A region as solids: the union of `parts` less the union of `holes`.
+struct SolidRegion {
+  std::vector<Solid> parts;
+  std::vector<Solid> holes;
+};
+
 struct SceneProblem {
   std::string path;
   std::string title;
@@ -53,6 +70,13 @@ struct SceneProblem {
   std::vector<pd::SupportSpec> supports;
   std::vector<SceneLoad> loads;
   std::vector<SceneProbe> probes;
+  // The same geometry as solids, for Gmsh: the bodies, and the mirror supports' regions that
+  // are taken out of them; `conforming`: boxes whose faces the mesh must contain (supports,
+  // loaded cells). `curved`: some shape is not a box, so the tensor-product grid cannot mesh it.
+  std::vector<SolidRegion> body_solids;
+  std::vector<SolidRegion> removed_solids;
+  std::vector<pd::Box> conforming;
+  bool curved = false;
   pd::Box bounding_box;                      // of the domain
   std::array<std::vector<double>, 3> planes; // per axis: every box face of the scene (sorted)
 

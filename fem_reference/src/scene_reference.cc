@@ -24,6 +24,7 @@
 
 #include "elastic_common.h"
 #include "report.h"
+#include "scene_mesh.h"
 
 #include <chrono>
 #include <cmath>
@@ -32,7 +33,6 @@
 #include <deal.II/fe/fe_q.h>
 #include <deal.II/fe/fe_values.h>
 #include <deal.II/fe/mapping_q1.h>
-#include <deal.II/grid/grid_generator.h>
 #include <deal.II/lac/dynamic_sparsity_pattern.h>
 #include <deal.II/numerics/fe_field_function.h>
 #include <iomanip>
@@ -66,65 +66,34 @@ const char* component_name(const int c) {
   return c == 0 ? "x" : c == 1 ? "y" : "z";
 }
 
-// Why: the level-0 target size is the smallest side of any body box, so the thinnest part of
-// the body gets one cell across and every cell stays close to cubic.
-double base_cell_size(const SceneProblem& problem) {
-  double h = std::numeric_limits<double>::max();
-  for (const pd::BodySpec& b : problem.bodies)
-    for (const pd::Box& box : b.region.boxes)
-      for (int a = 0; a < problem.dim(); ++a)
-        if (box.hi[a] - box.lo[a] > problem.tolerance())
-          h = std::min(h, box.hi[a] - box.lo[a]);
-  return h;
-}
 } // namespace
 
 template <int dim>
 SceneReference<dim>::SceneReference(const SceneProblem& p, const SceneOptions& o)
-    : problem(p), options(o), fe(FE_Q<dim>(2), dim), dof_handler(triangulation) {
+    : problem(p), options(o), fe(FE_Q<dim>(2), dim), use_gmsh(p.curved || o.gmsh) {
   AssertThrow(p.dim() == dim, ExcMessage("scene of another dimension"));
   component.resize(fe.n_dofs_per_cell());
   for (unsigned int i = 0; i < component.size(); ++i)
     component[i] = fe.system_to_component_index(i).first;
 }
 
-// Why: a tensor-product grid through every box face resolves each body, support and loaded
-// layer exactly; each interval between two faces gets round(length / h) cells. Cells whose
-// centre lies outside Ω (behind a clamp plane, in a box-shaped hole) are removed. Later levels
-// refine globally, which halves every cell.
+// Why: box-only scenes get the tensor-product grid once and refine it globally (nested
+// meshes); scenes with curved shapes are meshed by Gmsh anew for every level (scene_mesh.h).
+// The DoFHandler is rebuilt with a new mesh: a triangulation cannot be cleared under it.
 template <int dim>
-void SceneReference<dim>::make_grid() {
-  if (triangulation.n_active_cells() > 0) {
-    triangulation.refine_global(1);
-    return;
-  }
-  base_size = base_cell_size(problem);
-  std::vector<std::vector<double>> steps(dim);
-  Point<dim> lo, hi;
-  for (unsigned int a = 0; a < dim; ++a) {
-    const std::vector<double>& planes = problem.planes[a];
-    lo[a] = planes.front();
-    hi[a] = planes.back();
-    for (std::size_t k = 0; k + 1 < planes.size(); ++k) {
-      const double length = planes[k + 1] - planes[k];
-      const long n = std::max(1L, std::lround(length / base_size));
-      for (long i = 0; i < n; ++i)
-        steps[a].push_back(length / static_cast<double>(n));
-    }
-  }
-  Triangulation<dim> box;
-  GridGenerator::subdivided_hyper_rectangle(box, steps, lo, hi, false);
-  std::set<typename Triangulation<dim>::active_cell_iterator> outside;
-  for (const auto& cell : box.active_cell_iterators())
-    if (!problem.in_domain(to_vec3(cell->center())))
-      outside.insert(cell);
-  if (outside.size() == box.n_active_cells())
-    throw std::runtime_error("the scene's continuum body is empty (every cell lies behind a "
-                             "mirror support or in a hole)");
-  if (outside.empty())
-    triangulation.copy_triangulation(box);
+void SceneReference<dim>::make_grid(const unsigned int level) {
+  if (level == 0)
+    base_size = base_cell_size(problem);
+  const double h = base_size / std::pow(2., level);
+  if (use_gmsh) {
+    dof_handler.reset();
+    gmsh_mesh(problem, base_size, level, options.output_directory / "mesh.msh", triangulation);
+  } else if (level == 0)
+    box_grid(problem, h, triangulation);
   else
-    GridGenerator::create_triangulation_with_removed_cells(box, outside, triangulation);
+    triangulation.refine_global(1);
+  if (!dof_handler)
+    dof_handler = std::make_unique<DoFHandler<dim>>(triangulation);
 }
 
 // Why: the default sequence ends at the last level whose Q2 system stays within a budget of
@@ -150,13 +119,13 @@ unsigned int SceneReference<dim>::choose_levels() const {
 // A later support overrides an earlier one on the same dof, as in libpd.
 template <int dim>
 void SceneReference<dim>::setup_system() {
-  dof_handler.distribute_dofs(fe);
-  const auto n = dof_handler.n_dofs();
+  dof_handler->distribute_dofs(fe);
+  const auto n = dof_handler->n_dofs();
   std::vector<Point<dim>> points(n);
-  DoFTools::map_dofs_to_support_points(MappingQ1<dim>(), dof_handler, points);
+  DoFTools::map_dofs_to_support_points(MappingQ1<dim>(), *dof_handler, points);
   dof_component.assign(n, 0);
   std::vector<types::global_dof_index> dofs(fe.n_dofs_per_cell());
-  for (const auto& cell : dof_handler.active_cell_iterators()) {
+  for (const auto& cell : dof_handler->active_cell_iterators()) {
     cell->get_dof_indices(dofs);
     for (unsigned int i = 0; i < dofs.size(); ++i)
       dof_component[dofs[i]] = component[i];
@@ -199,7 +168,7 @@ void SceneReference<dim>::setup_system() {
   constraints.close();
 
   DynamicSparsityPattern dsp(n);
-  DoFTools::make_sparsity_pattern(dof_handler, dsp, constraints, false);
+  DoFTools::make_sparsity_pattern(*dof_handler, dsp, constraints, false);
   const IndexSet all_dofs = complete_index_set(n);
   system_matrix.reinit(all_dofs, all_dofs, dsp, MPI_COMM_WORLD);
   system_rhs.reinit(all_dofs, MPI_COMM_WORLD);
@@ -215,7 +184,7 @@ void SceneReference<dim>::measure_loads() {
   const QGauss<dim> quadrature(fe.degree + 1);
   FEValues<dim> fv(fe, quadrature, update_quadrature_points | update_JxW_values);
   std::vector<double> volume(problem.loads.size(), 0.);
-  for (const auto& cell : dof_handler.active_cell_iterators()) {
+  for (const auto& cell : dof_handler->active_cell_iterators()) {
     fv.reinit(cell);
     for (const unsigned int q : fv.quadrature_point_indices())
       for (std::size_t l = 0; l < problem.loads.size(); ++l)
@@ -270,7 +239,7 @@ void SceneReference<dim>::assemble_system() {
   FullMatrix<double> cell_matrix;
   Vector<double> cell_rhs;
   std::vector<types::global_dof_index> dofs(fe.n_dofs_per_cell());
-  for (const auto& cell : dof_handler.active_cell_iterators()) {
+  for (const auto& cell : dof_handler->active_cell_iterators()) {
     cell_system(cell, fv, cell_matrix, cell_rhs);
     cell->get_dof_indices(dofs);
     constraints.distribute_local_to_global(cell_matrix, cell_rhs, dofs, system_matrix, system_rhs);
@@ -284,7 +253,7 @@ void SceneReference<dim>::solve() {
   Point<dim> centre;
   for (unsigned int a = 0; a < dim; ++a)
     centre[a] = (problem.bounding_box.lo[a] + problem.bounding_box.hi[a]) / 2;
-  const CgStatistics stats = solve_elasticity(dof_handler, system_matrix, system_rhs, constraints,
+  const CgStatistics stats = solve_elasticity(*dof_handler, system_matrix, system_rhs, constraints,
                                               centre, "AMG", 1e-10, 10000, solution);
   levels.back().iterations = stats.iterations;
 }
@@ -311,7 +280,7 @@ double SceneReference<dim>::reaction(const SceneProbe& probe) const {
   Vector<double> u(n), r(n);
   std::vector<types::global_dof_index> dofs(n);
   double sum = 0.;
-  for (const auto& cell : dof_handler.active_cell_iterators()) {
+  for (const auto& cell : dof_handler->active_cell_iterators()) {
     cell->get_dof_indices(dofs);
     if (std::none_of(dofs.begin(), dofs.end(), [&](auto i) { return wanted.count(i) > 0; }))
       continue;
@@ -327,7 +296,7 @@ double SceneReference<dim>::reaction(const SceneProbe& probe) const {
 
 template <int dim>
 void SceneReference<dim>::evaluate_probes() {
-  Functions::FEFieldFunction<dim> field(dof_handler, solution);
+  Functions::FEFieldFunction<dim> field(*dof_handler, solution);
   auto& values = levels.back().values;
   for (const SceneProbe& probe : problem.probes) {
     if (probe.quantity == SceneProbe::Quantity::reaction) {
@@ -401,14 +370,14 @@ void SceneReference<dim>::run() {
   unsigned int n_levels = 0;
   for (unsigned int level = 0; level == 0 || level < n_levels; ++level) {
     const auto t0 = std::chrono::steady_clock::now();
-    make_grid();
+    make_grid(level);
     if (level == 0)
       n_levels = choose_levels();
     levels.emplace_back();
     SceneLevel& l = levels.back();
     setup_system();
     l.cells = triangulation.n_active_cells();
-    l.dofs = dof_handler.n_dofs();
+    l.dofs = dof_handler->n_dofs();
     l.h = base_size / std::pow(2., level);
     assemble_system();
     solve();

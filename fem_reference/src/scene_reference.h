@@ -14,6 +14,7 @@
 #include <deal.II/lac/trilinos_vector.h>
 #include <deal.II/lac/vector.h>
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -23,6 +24,7 @@ using namespace dealii;
 struct SceneOptions {
   unsigned int levels = 0; // 0: as many as fit the default budget (at least 3)
   bool coarse = false;     // 3 levels: a quick run for the tests
+  bool gmsh = false;       // mesh with Gmsh even if every shape is a box
   std::filesystem::path output_directory;
 };
 
@@ -46,7 +48,7 @@ public:
   void run();
 
 private:
-  void make_grid();
+  void make_grid(unsigned int level);
   void setup_system();
   void assemble_system();
   void solve();
@@ -65,7 +67,8 @@ private:
 
   Triangulation<dim> triangulation;
   const FESystem<dim> fe;
-  DoFHandler<dim> dof_handler;
+  const bool use_gmsh;
+  std::unique_ptr<DoFHandler<dim>> dof_handler;
   AffineConstraints<double> constraints;
   std::vector<unsigned int> component; // of each local shape function
   std::vector<types::global_dof_index> dof_component;
