@@ -85,7 +85,8 @@ std::size_t count_lattice_points(const ModelDimension& d, const LatticeSpec& lat
                                  const Region& region) {
   // Counting by index ranges first keeps absurd requests (10^12 particles) cheap to reject.
   double upper = 0;
-  for (const Box& b : region.boxes) {
+  const std::vector<Box> cover = region.cover(d.dim);
+  for (const Box& b : cover) {
     double product = 1;
     for (int a = 0; a < d.dim; ++a) {
       const auto r = index_range(lattice, a, b.lo[a], b.hi[a]);
@@ -96,13 +97,17 @@ std::size_t count_lattice_points(const ModelDimension& d, const LatticeSpec& lat
   if (upper >= 1.8e19) {
     return std::numeric_limits<std::size_t>::max(); // beyond size_t: clamp, never wrap to 0
   }
-  if (region.boxes.size() <= 1 || upper > 2e7) {
+  if ((cover.size() <= 1 && region.only_boxes()) || upper > 2e7) {
     return static_cast<std::size_t>(upper); // exact for one box, an upper bound otherwise
   }
   std::unordered_set<std::array<long long, 3>, IndexHash> seen;
-  for (const Box& b : region.boxes) {
-    for_each_lattice_point(d, lattice, b,
-                           [&](const std::array<long long, 3>& idx) { seen.insert(idx); });
+  const double tol = 1e-6 * lattice.spacing;
+  for (const Box& b : cover) {
+    for_each_lattice_point(d, lattice, b, [&](const std::array<long long, 3>& idx) {
+      if (region.only_boxes() || region.contains(point_of(d, lattice, idx), d.dim, tol)) {
+        seen.insert(idx);
+      }
+    });
   }
   return seen.size();
 }
@@ -119,8 +124,16 @@ ParticleSet generate_lattice(const ModelDimension& d, const LatticeSpec& lattice
   std::vector<Entry> entries;
   std::unordered_set<std::array<long long, 3>, IndexHash> seen;
   for (std::size_t b = 0; b < bodies.size(); ++b) {
-    for (const Box& box : bodies[b].region.boxes) {
+    const Region& region = bodies[b].region;
+    // Shapes and holes: the lattice points of the covering boxes that the region holds, with the
+    // tolerance of index_range.
+    const bool filter = !region.only_boxes();
+    const double tol = 1e-6 * lattice.spacing;
+    for (const Box& box : region.cover(d.dim)) {
       for_each_lattice_point(d, lattice, box, [&](const std::array<long long, 3>& idx) {
+        if (filter && !region.contains(point_of(d, lattice, idx), d.dim, tol)) {
+          return;
+        }
         if (seen.insert(idx).second) {
           entries.push_back({idx, static_cast<std::uint16_t>(b)});
         }

@@ -346,14 +346,12 @@ ExtrapolatedParticles extrapolated_particles(const ModelSpec& spec, const Partic
 /// proportion to particle volume among the body particles (ghosts carry none).
 std::vector<double> load_force_densities(const ModelSpec& spec, const ParticleSet& particles,
                                          std::size_t body_count) {
-  const double tol = region_tolerance(spec);
-  const int dim = spec.dimension.dim;
   std::vector<double> force_density;
   if (!spec.loads.empty()) {
     force_density.assign(3 * particles.size(), 0.0);
   }
   for (const LoadSpec& load : spec.loads) {
-    const auto members = particles_in(particles, load.load.region, dim, tol, body_count);
+    const auto members = load_particles(spec, particles, load, body_count);
     if (members.empty()) {
       throw std::runtime_error("load '" + load.name + "' acts on no particle");
     }
@@ -368,6 +366,7 @@ std::vector<double> load_force_densities(const ModelSpec& spec, const ParticleSe
         density = load.load.value[c];
         break;
       case BoxRegionLoad::Kind::total:
+      case BoxRegionLoad::Kind::point:
         density = load.load.value[c] / total_volume;
         break;
       case BoxRegionLoad::Kind::per_area:
@@ -382,6 +381,37 @@ std::vector<double> load_force_densities(const ModelSpec& spec, const ParticleSe
   }
   return force_density;
 }
+
+} // namespace
+
+std::vector<std::uint32_t> load_particles(const ModelSpec& spec, const ParticleSet& particles,
+                                          const LoadSpec& load, std::size_t body_count) {
+  const int dim = spec.dimension.dim;
+  const std::size_t n = std::min(body_count, particles.size());
+  if (load.load.kind != BoxRegionLoad::Kind::point) {
+    return particles_in(particles, load.load.region, dim, region_tolerance(spec), n);
+  }
+  std::vector<double> distance(n);
+  double nearest = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < n; ++i) {
+    double s = 0;
+    for (std::size_t a = 0; a < static_cast<std::size_t>(dim); ++a) {
+      const double d = particles.position[i][a] - load.load.point[a];
+      s += d * d;
+    }
+    distance[i] = std::sqrt(s);
+    nearest = std::min(nearest, distance[i]);
+  }
+  std::vector<std::uint32_t> members;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (distance[i] <= nearest + 1e-6 * spec.lattice.spacing) {
+      members.push_back(static_cast<std::uint32_t>(i));
+    }
+  }
+  return members;
+}
+
+namespace {
 
 /// Bonds whose factor is zero (the `gradient` weights beyond two spacings, bonds between two
 /// dependants) store no energy and carry no force: they leave the family, so the kernel, the

@@ -259,7 +259,9 @@ ResourceEstimate estimate_resources(const ModelSpec& spec, const SolverSpec& sol
   const ModelDimension& d = spec.dimension;
   Region all;
   for (const BodySpec& b : spec.bodies) {
-    all.boxes.insert(all.boxes.end(), b.region.boxes.begin(), b.region.boxes.end());
+    // Shapes by their bounding boxes, holes ignored: never fewer particles than there are.
+    const std::vector<Box> cover = b.region.cover(d.dim);
+    all.boxes.insert(all.boxes.end(), cover.begin(), cover.end());
   }
   const double bodies = lattice_points_in_union(d, spec.lattice, all);
   // `gradient` weights are solved for here only where that is cheap (their orbit table grows as

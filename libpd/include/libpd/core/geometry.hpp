@@ -1,8 +1,10 @@
-// Geometry primitives: points, axis-aligned boxes and unions of boxes.
+// Geometry primitives: points, axis-aligned boxes, shapes, and regions made of them.
 #pragma once
 
 #include <array>
 #include <cmath>
+#include <limits>
+#include <utility>
 #include <vector>
 
 namespace pd {
@@ -34,17 +36,123 @@ struct Box {
   bool operator==(const Box&) const = default;
 };
 
-/// A region is a union of boxes; a point belongs to it if it is in any box.
-struct Region {
-  std::vector<Box> boxes;
+/// A solid shape beside boxes (issue 19): bodies may be cylinders or spheres, and any body may
+/// have shapes taken out of it (holes, notches, cuts). Only the first `dim` coordinates count, so
+/// in 2D a cylinder along z and a sphere are both disks.
+struct Shape {
+  enum class Kind { box, cylinder, sphere, half_space } kind = Kind::box;
+  Box box;              ///< box
+  Vec3 centre{0, 0, 0}; ///< cylinder, sphere: centre; half_space: a point on its plane
+  double radius = 0;    ///< cylinder, sphere
+  int axis = 2;         ///< cylinder: the axis it runs along (0, 1, 2 = x, y, z)
+  /// cylinder: extent along its axis, centred on `centre`; infinite: unbounded along the axis
+  double length = std::numeric_limits<double>::infinity();
+  Vec3 normal{0, 0, 1}; ///< half_space: the points p with (p − centre)·normal ≥ 0
 
+  /// True if p lies in the shape, its surface included within `tol` (a negative `tol` shrinks it).
   bool contains(const Vec3& p, int dim, double tol) const {
-    for (const Box& b : boxes) {
-      if (b.contains(p, dim, tol)) {
-        return true;
+    switch (kind) {
+    case Kind::box:
+      return box.contains(p, dim, tol);
+    case Kind::sphere:
+      return distance_from_centre(p, dim, -1) <= radius + tol;
+    case Kind::cylinder:
+      if (axis < dim && std::abs(p[static_cast<std::size_t>(axis)] -
+                                 centre[static_cast<std::size_t>(axis)]) > 0.5 * length + tol) {
+        return false;
       }
+      return distance_from_centre(p, dim, axis) <= radius + tol;
+    case Kind::half_space: {
+      double s = 0;
+      for (std::size_t k = 0; k < static_cast<std::size_t>(dim); ++k) {
+        s += (p[k] - centre[k]) * normal[k];
+      }
+      double n2 = 0;
+      for (std::size_t k = 0; k < static_cast<std::size_t>(dim); ++k) {
+        n2 += normal[k] * normal[k];
+      }
+      return s >= -tol * std::sqrt(n2);
+    }
     }
     return false;
+  }
+  /// Whether the shape is bounded in the first `dim` coordinates (a half-space never is).
+  bool bounded(int dim) const {
+    return kind == Kind::box || kind == Kind::sphere ||
+           (kind == Kind::cylinder && (axis >= dim || std::isfinite(length)));
+  }
+  /// The smallest box holding the shape; only for bounded shapes.
+  Box bounds(int dim) const {
+    if (kind == Kind::box) {
+      return box;
+    }
+    Box b{centre, centre};
+    for (std::size_t k = 0; k < static_cast<std::size_t>(dim); ++k) {
+      const double half =
+          kind == Kind::cylinder && static_cast<int>(k) == axis ? 0.5 * length : radius;
+      b.lo[k] -= half;
+      b.hi[k] += half;
+    }
+    return b;
+  }
+  bool operator==(const Shape&) const = default;
+
+private:
+  /// Distance from the centre in the first `dim` coordinates, leaving out axis `skip`.
+  double distance_from_centre(const Vec3& p, int dim, int skip) const {
+    double s = 0;
+    for (int k = 0; k < dim; ++k) {
+      if (k != skip) {
+        const double d = p[static_cast<std::size_t>(k)] - centre[static_cast<std::size_t>(k)];
+        s += d * d;
+      }
+    }
+    return std::sqrt(s);
+  }
+};
+
+/// A region is a union of boxes and shapes, minus the shapes in `minus`. A point on the surface
+/// of a hole belongs to the region (the hole is shrunk by the tolerance), as a point on the
+/// surface of a box does.
+struct Region {
+  Region() = default;
+  /// A plain union of boxes (brace-initialisable: Region{{box}}).
+  Region(std::vector<Box> union_of_boxes) : boxes(std::move(union_of_boxes)) {} // NOLINT
+
+  std::vector<Box> boxes;
+  std::vector<Shape> shapes; ///< added to the union
+  std::vector<Shape> minus;  ///< taken out of it: holes, notches, cuts
+
+  bool contains(const Vec3& p, int dim, double tol) const {
+    bool inside = false;
+    for (const Box& b : boxes) {
+      if (b.contains(p, dim, tol)) {
+        inside = true;
+        break;
+      }
+    }
+    for (std::size_t k = 0; !inside && k < shapes.size(); ++k) {
+      inside = shapes[k].contains(p, dim, tol);
+    }
+    if (!inside) {
+      return false;
+    }
+    for (const Shape& hole : minus) {
+      if (hole.contains(p, dim, -tol)) {
+        return false;
+      }
+    }
+    return true;
+  }
+  /// Whether the region is a plain union of boxes (what the box-only checks can handle exactly).
+  bool only_boxes() const { return shapes.empty() && minus.empty(); }
+  /// Boxes that together cover the region: its boxes and the bounds of its shapes.
+  std::vector<Box> cover(int dim) const {
+    std::vector<Box> out = boxes;
+    for (const Shape& s : shapes) {
+      out.push_back(s.bounds(dim));
+    }
+    return out;
   }
   bool operator==(const Region&) const = default;
 };

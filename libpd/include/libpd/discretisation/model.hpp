@@ -44,19 +44,21 @@ struct BondState {
 
 struct BoxRegionLoad {
   Region region;
-  enum class Kind { total, per_area, per_length, body } kind = Kind::total;
+  enum class Kind { total, per_area, per_length, body, point } kind = Kind::total;
   Vec3 value{0, 0, 0};
-  double measure = 1; ///< area [m²] or length [m] for per_area / per_length
+  double measure = 1;  ///< area [m²] or length [m] for per_area / per_length
+  Vec3 point{0, 0, 0}; ///< kind point: where the force acts (load_particles says on which)
 };
 
 template <>
 struct EnumName<BoxRegionLoad::Kind> {
   using Kind = BoxRegionLoad::Kind;
-  static constexpr NameTable<Kind, 4> table{{
+  static constexpr NameTable<Kind, 5> table{{
       {"total", Kind::total, "total force [N] spread over the region"},
       {"per_area", Kind::per_area, "traction [N/m²] on the loaded area"},
       {"per_length", Kind::per_length, "line load [N/m] on the loaded length"},
       {"body", Kind::body, "body force density [N/m³]"},
+      {"point", Kind::point, "force [N] at a point, shared by the particles nearest it"},
   }};
 };
 
@@ -73,7 +75,15 @@ struct SupportSpec {
   /// and so puts the clamp about one spacing behind the face.
   std::array<bool, 3> mirror{false, false, false};
   Vec3 mirror_at{0, 0, 0};
+  /// Symmetry planes x_a = symmetry_at[a] (every a with symmetry[a]): the body lies on one side
+  /// and the model is half (a quarter, …) of a symmetric one. The lattice sites beyond the plane
+  /// within reach of the body's bonds take the displacement of their image with the normal
+  /// component negated: normal displacement zero on the plane, tangential free. A roller on a
+  /// whole face is the same condition. `region` may be empty: the whole plane.
+  std::array<bool, 3> symmetry{false, false, false};
+  Vec3 symmetry_at{0, 0, 0};
   bool mirrors() const { return mirror[0] || mirror[1] || mirror[2]; }
+  bool symmetric() const { return symmetry[0] || symmetry[1] || symmetry[2]; }
 };
 
 struct LoadSpec {
@@ -180,6 +190,11 @@ std::vector<Constraint> support_constraints(const ModelSpec& spec, const Particl
 
 /// The clamp planes of spec's mirror supports, each with the side its support's region lies on.
 std::vector<ClampPlane> clamp_planes(const ModelSpec& spec);
+
+/// The body particles (of the first `body_count`) a load acts on: those in its region, or for a
+/// point load the particles nearest its point (all within 10⁻⁶ λ of the nearest distance).
+std::vector<std::uint32_t> load_particles(const ModelSpec& spec, const ParticleSet& particles,
+                                          const LoadSpec& load, std::size_t body_count);
 
 /// Build particles, families, bond parameters, supports and loads.
 /// Throws std::runtime_error for inconsistent specs that the scene checker did not catch.

@@ -35,10 +35,26 @@ private:
 
 struct ProbeSpec {
   std::string name;
-  enum class Kind { point, region } kind = Kind::point;
+  /// Where: the particle nearest a point, the mean over a region, or a support's particles.
+  enum class Kind { point, region, support } kind = Kind::point;
+  /// What: a displacement component; the force a support exerts on the body; the normal stress
+  /// σ_cc from the bond forces; the damage index (eq. 13).
+  enum class Quantity { displacement, reaction, stress, damage } quantity = Quantity::displacement;
   Vec3 point{0, 0, 0};
   Region region;
-  int component = 0; ///< 0, 1, 2 = x, y, z
+  std::string support; ///< Kind::support: the support's name
+  int component = 0;   ///< 0, 1, 2 = x, y, z
+};
+
+template <>
+struct EnumName<ProbeSpec::Quantity> {
+  using Quantity = ProbeSpec::Quantity;
+  static constexpr NameTable<Quantity, 4> table{{
+      {"displacement", Quantity::displacement, "displacement component [m]"},
+      {"reaction", Quantity::reaction, "force the support exerts on the body [N]"},
+      {"stress", Quantity::stress, "normal stress σ_cc from the bond forces [Pa]"},
+      {"damage", Quantity::damage, "damage index φ (eq. 13)"},
+  }};
 };
 
 struct OutputSpec {

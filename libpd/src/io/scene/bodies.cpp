@@ -17,6 +17,25 @@ constexpr Key body_keys[] = {
     box_key("region [[lo], [hi]] filled with lattice particles", "[[0, 0, 0], [1, 0.1, 0.1]]"),
     boxes_key("instead of box: a union of boxes",
               "[[[0, 0, 0], [0.5, 0.1, 0.1]], [[0.5, 0, 0], [1, 0.1, 0.1]]]"),
+    {.name = "cylinder",
+     .type = Type::section,
+     .doc = "instead of box: a cylinder (2D: a disk)",
+     .need = Need::one_of,
+     .group = 1,
+     .show = Show::commented,
+     .section = &cylinder_section},
+    {.name = "sphere",
+     .type = Type::section,
+     .doc = "instead of box: a sphere (2D: a disk)",
+     .need = Need::one_of,
+     .group = 1,
+     .show = Show::commented,
+     .section = &sphere_section},
+    {.name = "minus",
+     .type = Type::list,
+     .doc = "shapes taken out of the body: holes, notches, cuts",
+     .show = Show::commented,
+     .section = &shape_section},
 };
 
 } // namespace
@@ -51,11 +70,21 @@ void read_bodies(Reader& r, ModelSpec& model, Marks& marks) {
              suggestion(material, material_names, "materials defined"));
     }
     body.material = static_cast<int>(found - material_names.begin());
-    const Reader::RegionRead region = r.region(f);
-    body.region = region.region;
+    YAML::Node where;
+    if (std::optional<Shape> shape = read_body_shape(r, f)) {
+      body.region.shapes.push_back(*shape);
+      where = f.find(shape->kind == Shape::Kind::sphere ? "sphere" : "cylinder")->at();
+      marks.body_box_nodes.emplace_back();
+    } else {
+      const Reader::RegionRead region = r.region(f);
+      body.region = region.region;
+      where = region.node;
+      marks.body_box_nodes.push_back(region.box_nodes);
+    }
+    body.region.minus = read_minus(r, f);
+    marks.body_nodes.push_back(where);
     marks.must_have_particles.push_back(
-        {body.region, region.node, fmt::format("body '{}' contains no lattice point", body.name)});
-    marks.body_box_nodes.push_back(region.box_nodes);
+        {body.region, where, fmt::format("body '{}' contains no lattice point", body.name)});
     model.bodies.push_back(std::move(body));
   }
 }

@@ -18,7 +18,7 @@ Region intersect_with_bodies(const Region& region, const std::vector<BodySpec>& 
   Region out;
   for (const Box& a : region.boxes) {
     for (const BodySpec& body : bodies) {
-      for (const Box& b : body.region.boxes) {
+      for (const Box& b : body.region.cover(dim)) {
         Box c = a;
         bool empty = false;
         for (int k = 0; k < dim; ++k) {
@@ -49,9 +49,13 @@ double distance_to_box(const Vec3& p, const Box& b, int dim) {
   return std::sqrt(sum);
 }
 
-/// Whether a union of boxes holds a lattice point: some box does. Counted per axis in floating
-/// point, so it needs no enumeration and cannot overflow, whatever the box.
+/// Whether a region holds a lattice point. A union of boxes does if some box does, counted per
+/// axis in floating point, so it needs no enumeration and cannot overflow, whatever the box;
+/// shapes and holes are counted point by point (the memory guard has bounded the work).
 bool holds_lattice_point(const ModelDimension& d, const LatticeSpec& lattice, const Region& r) {
+  if (!r.only_boxes()) {
+    return count_lattice_points(d, lattice, r) > 0;
+  }
   return std::any_of(r.boxes.begin(), r.boxes.end(),
                      [&](const Box& b) { return lattice_points_in_box(d, lattice, b) > 0; });
 }
@@ -211,7 +215,7 @@ void check_regions(const Reader& r, const ModelSpec& model, const Marks& marks) 
     const auto& [p, node] = marks.probe_points[i];
     double nearest = inf;
     for (const BodySpec& b : model.bodies) {
-      for (const Box& box : b.region.boxes) {
+      for (const Box& box : b.region.cover(dim)) {
         nearest = std::min(nearest, distance_to_box(p, box, dim));
       }
     }
@@ -222,6 +226,42 @@ void check_regions(const Reader& r, const ModelSpec& model, const Marks& marks) 
                          marks.probe_point_names[i], fmt::format("{:.3g}", nearest),
                          format_number(lattice.spacing)),
              "put the point inside a body or on its surface");
+    }
+  }
+}
+
+/// The checks of check_regions that shapes and holes make inexact, on the generated particles:
+/// bodies of different materials sharing a particle, regions that must touch a body, and the
+/// volume a shaped body's particles represent.
+void check_shaped_bodies(const Reader& r, const ModelSpec& model, const Marks& marks,
+                         const ParticleSet& particles) {
+  const int dim = model.dimension.dim;
+  const double tol = 1e-6 * model.lattice.spacing;
+  for (std::size_t i = 0; i < particles.size(); ++i) {
+    const std::size_t a = particles.body[i];
+    for (std::size_t b = a + 1; b < model.bodies.size(); ++b) {
+      const BodySpec& later = model.bodies[b];
+      if (later.material != model.bodies[a].material &&
+          later.region.contains(particles.position[i], dim, tol)) {
+        r.fail(marks.body_nodes[b],
+               fmt::format("bodies '{}' and '{}' overlap but have different materials (at {})",
+                           model.bodies[a].name, later.name,
+                           fmt::format("[{:.6g}, {:.6g}, {:.6g}]", particles.position[i][0],
+                                       particles.position[i][1], particles.position[i][2])),
+               fmt::format("shared particles would silently belong to '{}' (listed first); "
+                           "take the other body out with 'minus' or use one material",
+                           model.bodies[a].name));
+      }
+    }
+  }
+  for (const RegionUse& use : marks.must_touch_bodies) {
+    const bool touches =
+        std::any_of(particles.position.begin(), particles.position.end(),
+                    [&](const Vec3& p) { return use.region.contains(p, dim, tol); });
+    if (!touches) {
+      r.fail(use.node, use.what,
+             "move or enlarge the box so that it contains particles of a body (particles sit at "
+             "lattice points inside the bodies)");
     }
   }
 }
@@ -237,13 +277,20 @@ std::optional<ParticleSet> check_against_lattice(const Reader& r, const Scene& s
   check_resources(r, scene, marks.lattice.find("spacing")->at());
   check_coordinates(r, model, marks);
   check_regions(r, model, marks);
-  // Mirror supports need each image to be a free particle: only the lattice can tell (the memory
-  // guard has passed, so generating the particles is affordable). Model building reuses them.
-  if (std::none_of(model.supports.begin(), model.supports.end(),
-                   [](const SupportSpec& s) { return s.mirrors(); })) {
+  // Mirror supports need each image to be a free particle, and regions checked against shaped
+  // bodies were only checked against the shapes' bounding boxes so far: only the lattice can
+  // tell (the memory guard has passed, so generating the particles is affordable). Model
+  // building reuses them.
+  const bool shaped = std::any_of(model.bodies.begin(), model.bodies.end(),
+                                  [](const BodySpec& b) { return !b.region.only_boxes(); });
+  if (!shaped && std::none_of(model.supports.begin(), model.supports.end(),
+                              [](const SupportSpec& s) { return s.mirrors(); })) {
     return std::nullopt;
   }
   ParticleSet particles = generate_lattice(model.dimension, model.lattice, model.bodies);
+  if (shaped) {
+    check_shaped_bodies(r, model, marks, particles);
+  }
   try {
     support_constraints(model, particles);
   } catch (const SupportError& e) {

@@ -69,6 +69,7 @@ struct Marks {
   std::vector<YAML::Node> material_nodes; ///< the name of each material
   std::vector<Fields> material_fields;
   std::vector<std::vector<YAML::Node>> body_box_nodes; ///< per body, per box
+  std::vector<YAML::Node> body_nodes;                  ///< per body: its box(es) or shape
   std::vector<YAML::Node> support_nodes;               ///< where a support's own errors point
   std::vector<RegionUse> must_have_particles;          ///< bodies
   std::vector<RegionUse> must_touch_bodies;            ///< supports, loads, region probes
@@ -81,6 +82,10 @@ void read_top_level(const YAML::Node& root, Reader& r, Scene& scene, Marks& mark
 void read_lattice(Reader& r, ModelSpec& model, Marks& marks);
 void read_materials(Reader& r, ModelSpec& model, Marks& marks);
 void read_bodies(Reader& r, ModelSpec& model, Marks& marks);
+/// A body's `cylinder` or `sphere`, if it has one instead of boxes (shapes.cpp).
+std::optional<Shape> read_body_shape(Reader& r, const Fields& f);
+/// A body's `minus` list: the shapes taken out of it.
+std::vector<Shape> read_minus(Reader& r, const Fields& f);
 void read_supports(Reader& r, ModelSpec& model, Marks& marks);
 void read_loads(Reader& r, ModelSpec& model, Marks& marks);
 /// `effects` and the `model` section.

@@ -1,0 +1,170 @@
+// Shapes beside boxes (issue 19): cylinder and sphere bodies, and the `minus` list of a body, the
+// shapes taken out of it (holes, notches, cuts). The geometry itself is core/geometry.hpp.
+#include "sections.hpp"
+
+namespace pd::scene {
+
+namespace {
+
+constexpr Key centre_key(std::string_view doc) {
+  return {.name = "centre",
+          .type = Type::vector,
+          .doc = doc,
+          .unit = "m",
+          .example = "[0.5, 0.5, 0]",
+          .need = Need::required};
+}
+constexpr Key radius_key{.name = "radius",
+                         .type = Type::number,
+                         .doc = "radius",
+                         .unit = "m",
+                         .range = positive,
+                         .example = "0.05",
+                         .need = Need::required};
+
+constexpr Key cylinder_keys[] = {
+    centre_key("centre of the cylinder (of its axis segment)"),
+    radius_key,
+    {.name = "axis",
+     .type = Type::choice,
+     .doc = "the axis the cylinder runs along; in 2D a cylinder along z is a disk",
+     .choices = axis_names,
+     .fallback = "z"},
+    {.name = "length",
+     .type = Type::number,
+     .doc = "extent along the axis, centred on 'centre'; omitted: unbounded along the axis (a "
+            "hole through the body; a body cylinder in 3D needs it)",
+     .unit = "m",
+     .range = positive,
+     .example = "1",
+     .show = Show::commented},
+};
+constexpr Key sphere_keys[] = {
+    centre_key("centre of the sphere (in 2D: of the disk)"),
+    radius_key,
+};
+constexpr Key half_space_keys[] = {
+    {.name = "point",
+     .type = Type::vector,
+     .doc = "a point on the bounding plane",
+     .unit = "m",
+     .example = "[1, 0, 0]",
+     .need = Need::required},
+    {.name = "normal",
+     .type = Type::vector,
+     .doc = "normal of the plane; the half-space is the side it points to",
+     .example = "[1, 1, 0]",
+     .need = Need::required},
+};
+
+} // namespace
+
+constinit const Section cylinder_section{"in a cylinder", cylinder_keys};
+constinit const Section sphere_section{"in a sphere", sphere_keys};
+constinit const Section half_space_section{"in a half_space", half_space_keys};
+
+namespace {
+
+constexpr Key shape_keys[] = {
+    {.name = "box",
+     .type = Type::box,
+     .doc = "a box [[lo], [hi]] taken out",
+     .unit = "m",
+     .example = "[[0.49, 0, 0], [0.51, 0.05, 0.1]]",
+     .need = Need::one_of,
+     .group = 1},
+    {.name = "cylinder",
+     .type = Type::section,
+     .doc = "a cylinder (2D: a disk) taken out",
+     .need = Need::one_of,
+     .group = 1,
+     .show = Show::commented,
+     .section = &cylinder_section},
+    {.name = "sphere",
+     .type = Type::section,
+     .doc = "a sphere (2D: a disk) taken out",
+     .need = Need::one_of,
+     .group = 1,
+     .show = Show::commented,
+     .section = &sphere_section},
+    {.name = "half_space",
+     .type = Type::section,
+     .doc = "the half-space on the side the normal points to, taken out (a cut)",
+     .need = Need::one_of,
+     .group = 1,
+     .show = Show::commented,
+     .section = &half_space_section},
+};
+
+Shape read_round(Reader& r, const Fields& parent, std::string_view key) {
+  const Fields f = r.section(parent, key);
+  Shape s;
+  s.kind = key == "sphere" ? Shape::Kind::sphere : Shape::Kind::cylinder;
+  s.centre = *r.vector(f, "centre");
+  s.radius = *r.number(f, "radius");
+  if (s.kind == Shape::Kind::cylinder) {
+    if (const Entry* a = f.find("axis")) {
+      s.axis = r.word(a->at(), f.label("axis"), axis_names);
+      if (r.dim == 2 && s.axis != 2) {
+        r.fail(a->at(), "in a 2D scene a cylinder runs along z, out of the plane (a disk)",
+               "remove 'axis' or write 'axis: z'");
+      }
+    }
+    if (auto length = r.number(f, "length")) {
+      s.length = *length;
+    }
+  }
+  return s;
+}
+
+} // namespace
+
+constinit const Section shape_section{"in a shape of 'minus'", shape_keys};
+
+std::optional<Shape> read_body_shape(Reader& r, const Fields& f) {
+  for (std::string_view key : {"cylinder", "sphere"}) {
+    if (!f.has(key)) {
+      continue;
+    }
+    Shape s = read_round(r, f, key);
+    if (!s.bounded(r.dim)) {
+      r.fail(f.find(key)->at(),
+             fmt::format("the cylinder of {} is unbounded: a body must be finite", f.owner),
+             "give the cylinder a 'length'");
+    }
+    return s;
+  }
+  return std::nullopt;
+}
+
+std::vector<Shape> read_minus(Reader& r, const Fields& f) {
+  std::vector<Shape> out;
+  const auto list = r.items(f, "minus");
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    const Fields item =
+        r.open(list[i], list[i], shape_section, {},
+               fmt::format("shape #{} of 'minus' of {}", i + 1, f.owner), "a shape");
+    Shape s;
+    if (const Entry* b = item.find("box")) {
+      s.kind = Shape::Kind::box;
+      s.box = r.box(b->at(), item.label("box"));
+    } else if (item.has("half_space")) {
+      const Fields h = r.section(item, "half_space");
+      s.kind = Shape::Kind::half_space;
+      s.centre = *r.vector(h, "point");
+      s.normal = *r.vector(h, "normal");
+      if (norm(s.normal) == 0) {
+        r.fail(h.find("normal")->at(), "the normal of a half_space is zero",
+               "give the direction the removed side lies in, e.g. [1, 0, 0]");
+      }
+    } else if (item.has("cylinder") || item.has("sphere")) {
+      s = read_round(r, item, item.has("cylinder") ? "cylinder" : "sphere");
+    } else {
+      r.lookup(item, "box"); // reports the missing alternatives
+    }
+    out.push_back(s);
+  }
+  return out;
+}
+
+} // namespace pd::scene
