@@ -41,8 +41,8 @@ int add_box(const pd::Box& b, const int dim) {
 // inner normal along z (3D) or x (2D), then rotated onto n about c.
 int add_half_space(const Solid& s, const int dim, const double R) {
   const pd::Vec3& c = s.centre;
-  const double nn = std::sqrt(s.normal[0] * s.normal[0] + s.normal[1] * s.normal[1] +
-                              s.normal[2] * s.normal[2]);
+  const double nn =
+      std::sqrt(s.normal[0] * s.normal[0] + s.normal[1] * s.normal[1] + s.normal[2] * s.normal[2]);
   const pd::Vec3 n{s.normal[0] / nn, s.normal[1] / nn, s.normal[2] / nn};
   if (dim == 2) {
     const int tag = occ::addRectangle(c[0], c[1] - R, 0., 2 * R, 2 * R);
@@ -53,7 +53,8 @@ int add_half_space(const Solid& s, const int dim, const double R) {
   // Rotate e_z onto n: about e_z × n = (-n_y, n_x, 0) by acos(n_z).
   const double s_xy = std::hypot(n[0], n[1]);
   if (s_xy > 1e-12)
-    occ::rotate({{3, tag}}, c[0], c[1], c[2], -n[1], n[0], 0., std::acos(std::clamp(n[2], -1., 1.)));
+    occ::rotate({{3, tag}}, c[0], c[1], c[2], -n[1], n[0], 0.,
+                std::acos(std::clamp(n[2], -1., 1.)));
   else if (n[2] < 0)
     occ::rotate({{3, tag}}, c[0], c[1], c[2], 1., 0., 0., M_PI);
   return tag;

@@ -47,7 +47,25 @@ SolidRegion solids_of(const pd::Region& region) {
     s.box = box;
     out.parts.push_back(s);
   }
+  out.parts.insert(out.parts.end(), region.shapes.begin(), region.shapes.end());
+  out.holes = region.minus;
   return out;
+}
+
+// Why: box shapes and box holes are grid planes too; any other shape needs Gmsh.
+bool add_region_planes(const pd::Region& region, const int dim,
+                       std::array<std::vector<double>, 3>& planes) {
+  bool curved = false;
+  for (const pd::Box& box : region.boxes)
+    add_box_planes(box, dim, planes);
+  for (const auto* list : {&region.shapes, &region.minus})
+    for (const pd::Shape& s : *list) {
+      if (s.kind == pd::Shape::Kind::box)
+        add_box_planes(s.box, dim, planes);
+      else
+        curved = true;
+    }
+  return curved;
 }
 
 // Sorted, without duplicates (closer than `tol`), clipped to [lo, hi].
@@ -102,21 +120,11 @@ LatticeCells cells_of(const pd::ModelSpec& spec, const pd::ParticleSet& particle
   return cells;
 }
 
-std::vector<std::uint32_t> load_members(const pd::ModelSpec& spec, const pd::ParticleSet& ps,
-                                        const pd::LoadSpec& load) {
-  const double tol = 1e-6 * spec.lattice.spacing;
-  std::vector<std::uint32_t> out;
-  for (std::size_t i = 0; i < ps.size(); ++i)
-    if (load.load.region.contains(ps.position[i], spec.dimension.dim, tol))
-      out.push_back(static_cast<std::uint32_t>(i));
-  return out;
-}
-
 SceneLoad translate_load(const pd::ModelSpec& spec, const pd::ParticleSet& particles,
                          const pd::LoadSpec& load) {
   SceneLoad out;
   out.name = load.name;
-  const auto members = load_members(spec, particles, load);
+  const auto members = pd::load_particles(spec, particles, load, particles.size());
   if (members.empty())
     throw std::runtime_error("load '" + load.name + "' acts on no particle");
   out.cells = cells_of(spec, particles, members);
@@ -127,6 +135,7 @@ SceneLoad translate_load(const pd::ModelSpec& spec, const pd::ParticleSet& parti
     out.value = load.load.value;
     break;
   case Kind::total:
+  case Kind::point: // the particles nearest the point share it in proportion to volume
     out.value = load.load.value;
     break;
   case Kind::per_area:
@@ -138,21 +147,49 @@ SceneLoad translate_load(const pd::ModelSpec& spec, const pd::ParticleSet& parti
   return out;
 }
 
+std::size_t support_index(const pd::Scene& scene, const pd::ProbeSpec& probe) {
+  const auto& supports = scene.model.supports;
+  for (std::size_t s = 0; s < supports.size(); ++s)
+    if (supports[s].name == probe.support)
+      return s;
+  throw std::runtime_error("probe '" + probe.name + "' reads the reaction of support '" +
+                           probe.support + "', which the scene does not have");
+}
+
+// Why: PD's displacement and stress probes read particles, the ones libpd resolves for them;
+// the FE solution is evaluated at those particles' positions. resolve_probes reads only the
+// particles and the model's dimension and lattice, so a model without bonds is enough
+// (building the bond families of a fine lattice would cost more than the FE solve).
 std::vector<SceneProbe> translate_probes(const pd::Scene& scene, const pd::ParticleSet& particles,
                                          const SceneProblem& problem) {
-  // resolve_probes reads only the particles and the model's dimension and lattice, so a model
-  // without bonds is enough: building the bond families of a fine lattice would cost more
-  // than the FE solve.
+  using Q = pd::ProbeSpec::Quantity;
+  std::vector<pd::ProbeSpec> located;
+  for (const pd::ProbeSpec& spec : scene.probes) {
+    if (spec.quantity == Q::damage)
+      throw std::runtime_error("probe '" + spec.name +
+                               "' reads damage; the FE reference is linear elastic");
+    if (spec.quantity != Q::reaction)
+      located.push_back(spec);
+  }
   pd::Model model;
   model.spec = scene.model;
   model.particles = particles;
-  const auto resolved = pd::resolve_probes(scene.probes, model);
+  const auto resolved = pd::resolve_probes(located, model);
   std::vector<SceneProbe> out;
-  for (std::size_t k = 0; k < resolved.size(); ++k) {
+  std::size_t next = 0;
+  for (const pd::ProbeSpec& spec : scene.probes) {
     SceneProbe p;
-    p.name = resolved[k].name;
-    p.component = resolved[k].component;
-    for (const std::uint32_t i : resolved[k].particles) {
+    p.name = spec.name;
+    p.component = spec.component;
+    if (spec.quantity == Q::reaction) {
+      p.quantity = SceneProbe::Quantity::reaction;
+      p.support = support_index(scene, spec);
+      out.push_back(std::move(p));
+      continue;
+    }
+    p.quantity = spec.quantity == Q::stress ? SceneProbe::Quantity::stress
+                                            : SceneProbe::Quantity::displacement;
+    for (const std::uint32_t i : resolved[next++].particles) {
       const pd::Vec3& x = particles.position[i];
       if (!problem.in_domain(x, problem.tolerance()))
         throw std::runtime_error("probe '" + p.name +
@@ -190,6 +227,14 @@ int SceneProblem::body_at(const pd::Vec3& p) const {
   for (std::size_t b = 0; b < bodies.size(); ++b)
     if (bodies[b].region.contains(p, dim(), 0.))
       return static_cast<int>(b);
+  // A straight-edged cell along a curved hole reaches a little into the hole: its body is the
+  // one whose region holds the point with the holes left out.
+  for (std::size_t b = 0; b < bodies.size(); ++b) {
+    pd::Region filled = bodies[b].region;
+    filled.minus.clear();
+    if (filled.contains(p, dim(), tolerance()))
+      return static_cast<int>(b);
+  }
   return -1;
 }
 
@@ -211,8 +256,8 @@ SceneProblem read_scene_problem(const std::string& path) {
   bool first = true;
   for (const pd::BodySpec& b : spec.bodies) {
     p.body_solids.push_back(solids_of(b.region));
-    for (const pd::Box& box : b.region.boxes) {
-      add_box_planes(box, dim, planes);
+    p.curved = add_region_planes(b.region, dim, planes) || p.curved;
+    for (const pd::Box& box : b.region.cover(dim)) {
       for (int a = 0; a < 3; ++a) {
         p.bounding_box.lo[a] = first ? box.lo[a] : std::min(p.bounding_box.lo[a], box.lo[a]);
         p.bounding_box.hi[a] = first ? box.hi[a] : std::max(p.bounding_box.hi[a], box.hi[a]);
@@ -221,10 +266,9 @@ SceneProblem read_scene_problem(const std::string& path) {
     }
   }
   for (const pd::SupportSpec& s : spec.supports) {
-    for (const pd::Box& box : s.region.boxes) {
-      add_box_planes(box, dim, planes);
-      p.conforming.push_back(box);
-    }
+    p.curved = add_region_planes(s.region, dim, planes) || p.curved;
+    if (s.region.only_boxes())
+      p.conforming.insert(p.conforming.end(), s.region.boxes.begin(), s.region.boxes.end());
     if (s.mirrors()) {
       p.removed.push_back(s.region);
       p.removed_solids.push_back(solids_of(s.region));

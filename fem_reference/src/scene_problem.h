@@ -36,22 +36,15 @@ struct SceneLoad {
 
 struct SceneProbe {
   std::string name;
-  enum class Quantity { displacement, reaction } quantity = Quantity::displacement;
+  // displacement or stress (σ_cc) averaged over the probe's particles; reaction of a support
+  enum class Quantity { displacement, reaction, stress } quantity = Quantity::displacement;
   int component = 0;
-  std::vector<pd::Vec3> points; // displacement: the particles PD averages over
+  std::vector<pd::Vec3> points; // displacement, stress: the particles PD averages over
   std::size_t support = 0;      // reaction: index into SceneProblem::supports
 };
 
 // A solid of the scene's geometry as Gmsh builds it: a box or one of pd::Region's shapes.
-struct Solid {
-  enum class Kind { box, cylinder, sphere, half_space } kind = Kind::box;
-  pd::Box box;                 // box
-  pd::Vec3 centre{0, 0, 0};    // cylinder, sphere: centre; half_space: a point of its plane
-  double radius = 0.;          // cylinder, sphere
-  int axis = 2;                // cylinder: axis direction
-  double length = 0.;          // cylinder: extent along the axis (0: through everything)
-  pd::Vec3 normal{0, 0, 1};    // half_space: the side (p - centre)·normal >= 0
-};
+using Solid = pd::Shape;
 
 // A region as solids: the union of `parts` less the union of `holes`.
 struct SolidRegion {
@@ -87,8 +80,8 @@ struct SceneProblem {
   // Is p in the continuum body: in a body's region (grown by `tol`) and not strictly inside a
   // removed region (shrunk by `tol`)?
   bool in_domain(const pd::Vec3& p, double tol = 0.) const;
-  // The body whose material holds at p (the first listed containing it, as the lattice does);
-  // -1 outside every body.
+  // The body whose material holds at p (the first listed containing it, as the lattice does;
+  // a point in a hole goes to the body the hole is cut from); -1 outside every body.
   int body_at(const pd::Vec3& p) const;
   // Tolerance of region membership, as libpd's: 1e-6 λ.
   double tolerance() const { return 1e-6 * spacing; }

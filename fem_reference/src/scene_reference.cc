@@ -115,7 +115,9 @@ unsigned int SceneReference<dim>::choose_levels() const {
 
 // Why: supports become constraints on the dofs whose support points they hold. A fixed or
 // displacement support holds the nodes in its region (closed, tolerance 1e-6 λ); a mirror
-// support clamps u = 0 on its plane's face of Ω, within the support's extent across the plane.
+// support clamps u = 0 on its plane's face of Ω, within the support's extent across the plane;
+// a symmetry support holds the normal component on its plane (within its region, or all of
+// the plane if the region is empty), the tangential ones stay free.
 // A later support overrides an earlier one on the same dof, as in libpd.
 template <int dim>
 void SceneReference<dim>::setup_system() {
@@ -136,20 +138,24 @@ void SceneReference<dim>::setup_system() {
   support_dofs.assign(problem.supports.size(), {});
   for (std::size_t s = 0; s < problem.supports.size(); ++s) {
     const pd::SupportSpec& sup = problem.supports[s];
+    const bool whole_planes = sup.region.boxes.empty() && sup.region.shapes.empty();
     for (types::global_dof_index i = 0; i < n; ++i) {
       const pd::Vec3 p = to_vec3(points[i]);
       const unsigned int c = dof_component[i];
-      if (!sup.region.contains(p, dim, tol))
-        continue;
+      const bool in_region = sup.region.contains(p, dim, tol);
       bool held = false;
       double g = 0.;
-      for (unsigned int a = 0; a < dim; ++a)
-        if (sup.mirror[a] && std::abs(p[a] - sup.mirror_at[a]) <= tol)
-          held = true;
-      if (sup.prescribed[c]) {
+      for (unsigned int a = 0; a < dim; ++a) {
+        const bool on_mirror = sup.mirror[a] && std::abs(p[a] - sup.mirror_at[a]) <= tol;
+        const bool on_symmetry = sup.symmetry[a] && c == a &&
+                                 std::abs(p[a] - sup.symmetry_at[a]) <= tol &&
+                                 (whole_planes || in_region);
+        held = held || (on_mirror && in_region) || on_symmetry;
+      }
+      if (in_region && sup.prescribed[c]) {
         held = true;
         g = sup.displacement[c];
-      } else if (sup.fixed[c])
+      } else if (in_region && sup.fixed[c])
         held = true;
       if (held) {
         value[i] = g;
@@ -214,8 +220,12 @@ void SceneReference<dim>::cell_system(const typename DoFHandler<dim>::active_cel
   cell_rhs.reinit(n);
   fv.reinit(cell);
   const int body = problem.body_at(to_vec3(cell->center()));
-  const pd::Material& m =
-      problem.materials.at(static_cast<std::size_t>(problem.bodies.at(body).material));
+  if (body < 0)
+    throw std::runtime_error("a cell of the mesh lies in no body (at " +
+                             std::to_string(cell->center()[0]) + ", " +
+                             std::to_string(cell->center()[1]) + ")");
+  const pd::Material& m = problem.materials.at(static_cast<std::size_t>(
+      problem.bodies.at(static_cast<std::size_t>(std::max(body, 0))).material));
   const LameConstants lame = lame_constants(m.youngs_modulus * m.stiffness_factor, m.poisson_ratio,
                                             problem.plane_stress());
   std::vector<Tensor<1, dim>> grad;
@@ -306,13 +316,41 @@ void SceneReference<dim>::evaluate_probes() {
     std::vector<Point<dim>> points;
     for (const pd::Vec3& x : probe.points)
       points.push_back(to_point<dim>(x));
-    std::vector<Vector<double>> u(points.size(), Vector<double>(dim));
-    field.vector_value_list(points, u);
     double sum = 0.;
-    for (const auto& v : u)
-      sum += v[probe.component];
-    values.push_back(sum / static_cast<double>(u.size()));
+    if (probe.quantity == SceneProbe::Quantity::displacement) {
+      std::vector<Vector<double>> u(points.size(), Vector<double>(dim));
+      field.vector_value_list(points, u);
+      for (const auto& v : u)
+        sum += v[probe.component];
+    } else {
+      std::vector<std::vector<Tensor<1, dim>>> grad(points.size(),
+                                                    std::vector<Tensor<1, dim>>(dim));
+      field.vector_gradient_list(points, grad);
+      for (std::size_t k = 0; k < points.size(); ++k)
+        sum += normal_stress(probe.points[k], grad[k], probe.component);
+    }
+    values.push_back(sum / static_cast<double>(points.size()));
   }
+}
+
+// Why: PD's stress probe reads σ_cc; here σ_cc = λ tr ε + 2μ ε_cc of the body's material at x
+// (plane stress: λ*; the out-of-plane σ_zz of a 2D model is λ tr ε in plane strain, 0 in plane
+// stress).
+template <int dim>
+double SceneReference<dim>::normal_stress(const pd::Vec3& x,
+                                          const std::vector<Tensor<1, dim>>& grad,
+                                          const int c) const {
+  const int body = problem.body_at(x);
+  const pd::Material& m = problem.materials.at(static_cast<std::size_t>(
+      problem.bodies.at(static_cast<std::size_t>(std::max(body, 0))).material));
+  const LameConstants lame = lame_constants(m.youngs_modulus * m.stiffness_factor, m.poisson_ratio,
+                                            problem.plane_stress());
+  double trace = 0.;
+  for (unsigned int d = 0; d < dim; ++d)
+    trace += grad[d][d];
+  if (c >= dim)
+    return problem.plane_stress() ? 0. : lame.lambda * trace;
+  return lame.lambda * trace + 2. * lame.mu * grad[c][c];
 }
 
 // Why: fe.json is what `pd verify` reads beside the PD run: per level the mesh and time, per
@@ -347,8 +385,9 @@ void SceneReference<dim>::output_results(const double wall_time) const {
       const Richardson r = richardson(values, 2.);
       w.begin_object();
       w.value("name", probe.name);
-      w.value("quantity",
-              probe.quantity == SceneProbe::Quantity::reaction ? "reaction" : "displacement");
+      w.value("quantity", probe.quantity == SceneProbe::Quantity::reaction ? "reaction"
+                          : probe.quantity == SceneProbe::Quantity::stress ? "stress"
+                                                                           : "displacement");
       w.value("component", component_name(probe.component));
       w.begin_array("values");
       for (const double v : values)

@@ -61,6 +61,7 @@ private:
                    FEValues<dim>& fe_values, FullMatrix<double>& cell_matrix,
                    Vector<double>& cell_rhs) const;
   double reaction(const SceneProbe& probe) const;
+  double normal_stress(const pd::Vec3& x, const std::vector<Tensor<1, dim>>& grad, int c) const;
 
   const SceneProblem& problem;
   const SceneOptions options;

@@ -11,10 +11,18 @@ CASE
               (the scene loads the top particle layer as a body force, the .prm the top face
               by a traction: their difference, ~0.03 %, is below the estimates at 3 levels).
   bar-2d      tests/scenes/bar-2d.yaml: a plane-stress bar (nu = 0) in tension, exact for Q2.
+  notched-gmsh  tests/scenes/notched-beam-2d.yaml (a box notch) on the tensor-product grid and
+              through Gmsh (--gmsh): the two must agree within 1.5 x the sum of their estimates.
+  kirsch      tests/scenes/kirsch-plate-2d.yaml: a plate with a hole (d/W = 0.1) in tension,
+              meshed by Gmsh. The diameter change along the load axis, read at the rim
+              particles, against Kirsch's infinite plate at the same particles: the finite width
+              raises it; Heywood's factor (2 + (1 - d/W)^3)/(1 - d/W) = 3.03 vs 3, +1.1 %, so the
+              FE must lie between Kirsch and Kirsch + 2 x that.
 Exit 0 on success, 1 with a message naming the failing check.
 """
 import argparse
 import json
+import math
 import re
 import subprocess
 import sys
@@ -93,15 +101,73 @@ def bar_2d(args):
     return ok
 
 
+def notched_gmsh(args):
+    scene = args.source / "tests/scenes/notched-beam-2d.yaml"
+    runs = {}
+    for mesher, extra in (("grid", []), ("gmsh", ["--gmsh"])):
+        out = args.work / f"scene-notched-{mesher}"
+        run([args.pd_fem, "--scene", scene, "--coarse", "-o", out] + extra)
+        runs[mesher] = fe_json(out / "fe.json")
+    ok = True
+    for p in runs["grid"]["probes"]:
+        q = probe(runs["gmsh"], p["name"])
+        diff = abs(p["value"] - q["value"])
+        allowed = 1.5 * (p["error_estimate"] + q["error_estimate"])
+        ok &= check(diff <= allowed,
+                    f"notched {p['name']}: grid {p['value']:.8e} (est. {p['error_estimate']:.1e}),"
+                    f" gmsh {q['value']:.8e} (est. {q['error_estimate']:.1e}); |diff| {diff:.2e}"
+                    f" allowed {allowed:.2e}")
+    return ok
+
+
+def kirsch_displacement(x, y, sigma, E, nu, a, centre):
+    """Kirsch's plate with a hole of radius a under uniaxial tension sigma along x, plane
+    stress: (u_x, u_y) at (x, y), zero at the centre (Barber, Elasticity, §8.4.1)."""
+    X, Y = x - centre[0], y - centre[1]
+    r, th = math.hypot(X, Y), math.atan2(Y, X)
+    G, kappa = E / (2 * (1 + nu)), (3 - nu) / (1 + nu)
+    c2, s2 = math.cos(2 * th), math.sin(2 * th)
+    ur = sigma / (8 * G) * (r * (kappa - 1 + 2 * c2) + 2 * a * a / r * (1 + (kappa + 1) * c2)
+                            - 2 * a ** 4 / r ** 3 * c2)
+    ut = -sigma / (8 * G) * (2 * r + 2 * a * a * (kappa - 1) / r + 2 * a ** 4 / r ** 3) * s2
+    return (ur * math.cos(th) - ut * math.sin(th), ur * math.sin(th) + ut * math.cos(th))
+
+
+def kirsch(args):
+    out = args.work / "scene-kirsch"
+    run([args.pd_fem, "--scene", args.source / "tests/scenes/kirsch-plate-2d.yaml", "--coarse",
+         "-o", out])
+    fe = fe_json(out / "fe.json")
+    # The scene's data: E, nu, t, W, F, hole centre and radius, the probes' particles.
+    E, nu, t, W, F, a, centre = 200e9, 0.0, 0.1, 1.0, 1e6, 0.05, (1.5, 0.5)
+    sigma = F / (W * t)
+    rim = {"left": [(1.45, 0.49), (1.45, 0.51)], "right": [(1.55, 0.49), (1.55, 0.51)]}
+    u = {k: sum(kirsch_displacement(x, y, sigma, E, nu, a, centre)[0] for x, y in pts) / len(pts)
+         for k, pts in rim.items()}
+    closed = u["right"] - u["left"]
+    value = probe(fe, "right")["value"] - probe(fe, "left")["value"]
+    error = probe(fe, "right")["error_estimate"] + probe(fe, "left")["error_estimate"]
+    d_over_w = 2 * a / W
+    heywood = (2 + (1 - d_over_w) ** 3) / (1 - d_over_w)
+    excess = value / closed - 1
+    ok = check(0 <= excess <= 2 * (heywood / 3 - 1) and error <= 1e-3 * abs(value),
+               f"kirsch: rim diameter change along the load {value:.6e} m (est. error "
+               f"{error:.1e}), infinite plate {closed:.6e} m: {100 * excess:+.2f} % "
+               f"(finite width, Heywood {heywood:.4f}/3 = {100 * (heywood / 3 - 1):+.2f} %); "
+               f"{value / (sigma / E * 0.1):.3f} x the plate without the hole")
+    return ok
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("case", choices=["cantilever", "bar-2d"])
+    parser.add_argument("case", choices=["cantilever", "bar-2d", "notched-gmsh", "kirsch"])
     parser.add_argument("--pd-fem", type=Path, required=True)
     parser.add_argument("--source", type=Path, required=True, help="fem_reference/ folder")
     parser.add_argument("--work", type=Path, required=True)
     args = parser.parse_args()
-    cases = {"cantilever": cantilever, "bar-2d": bar_2d}
+    cases = {"cantilever": cantilever, "bar-2d": bar_2d, "notched-gmsh": notched_gmsh,
+             "kirsch": kirsch}
     sys.exit(0 if cases[args.case](args) else 1)
 
 
