@@ -239,11 +239,14 @@ int SceneProblem::body_at(const pd::Vec3& p) const {
 }
 
 SceneProblem read_scene_problem(const std::string& path) {
-  const pd::Scene scene = pd::load_scene(path);
+  return translate_scene(pd::load_scene(path));
+}
+
+SceneProblem translate_scene(const pd::Scene& scene) {
   check_supported(scene);
   const pd::ModelSpec& spec = scene.model;
   SceneProblem p;
-  p.path = path;
+  p.path = scene.path;
   p.title = scene.title;
   p.dimension = spec.dimension;
   p.spacing = spec.lattice.spacing;

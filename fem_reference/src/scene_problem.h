@@ -91,5 +91,7 @@ struct SceneProblem {
 // std::runtime_error naming any feature the FE problem cannot represent (damage, plasticity,
 // an unsupported shape, a probe on no body point).
 SceneProblem read_scene_problem(const std::string& path);
+// The same for a scene already read (tests set the features the reader cannot express yet).
+SceneProblem translate_scene(const pd::Scene& scene);
 
 } // namespace pdfem

@@ -404,7 +404,7 @@ void SceneReference<dim>::output_results(const double wall_time) const {
 }
 
 template <int dim>
-void SceneReference<dim>::run() {
+std::vector<SceneLevel> SceneReference<dim>::run() {
   const auto t_start = std::chrono::steady_clock::now();
   unsigned int n_levels = 0;
   for (unsigned int level = 0; level == 0 || level < n_levels; ++level) {
@@ -431,13 +431,13 @@ void SceneReference<dim>::run() {
     std::cerr << std::endl;
   }
   output_results(seconds_since(t_start));
+  return levels;
 }
 
-void solve_scene(const SceneProblem& problem, const SceneOptions& options) {
+std::vector<SceneLevel> solve_scene(const SceneProblem& problem, const SceneOptions& options) {
   if (problem.dim() == 2)
-    SceneReference<2>(problem, options).run();
-  else
-    SceneReference<3>(problem, options).run();
+    return SceneReference<2>(problem, options).run();
+  return SceneReference<3>(problem, options).run();
 }
 
 template class SceneReference<2>;

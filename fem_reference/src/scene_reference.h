@@ -37,15 +37,16 @@ struct SceneLevel {
   std::vector<double> values; // one per probe
 };
 
-// Solve the scene's problem in its dimension and write fe.json into the output directory.
-void solve_scene(const SceneProblem& problem, const SceneOptions& options);
+// Solve the scene's problem in its dimension and write fe.json into the output directory;
+// returns the levels (each with one value per probe).
+std::vector<SceneLevel> solve_scene(const SceneProblem& problem, const SceneOptions& options);
 
 template <int dim>
 class SceneReference {
 public:
   SceneReference(const SceneProblem& problem, const SceneOptions& options);
   // Solve on the levels, then write fe.json.
-  void run();
+  std::vector<SceneLevel> run();
 
 private:
   void make_grid(unsigned int level);
