@@ -105,8 +105,9 @@ DimTags add_region(const SolidRegion& region, const int dim, const double R) {
   return parts;
 }
 
-// Why: the body of the scene as one CSG solid, split along the faces of the supports and the
-// loaded cells (intersected with the body first, so nothing outside it is added).
+// Why: the body of the scene as CSG solids, split along the faces between bodies, of the
+// supports and of the loaded cells (intersected with the body first, so nothing outside it is
+// added).
 DimTags build_body(const SceneProblem& p, const int dim) {
   const double R = beyond(p);
   DimTags body, out;
@@ -116,7 +117,9 @@ DimTags build_body(const SceneProblem& p, const int dim) {
     if (body.empty())
       body = part;
     else if (!part.empty()) {
-      occ::fuse(body, part, out, map);
+      // Fragments, not a fusion: faces between bodies stay mesh faces, so every cell lies in
+      // one material.
+      occ::fragment(body, part, out, map);
       body = out;
     }
   }
