@@ -77,38 +77,75 @@ SceneReference<dim>::SceneReference(const SceneProblem& p, const SceneOptions& o
     component[i] = fe.system_to_component_index(i).first;
 }
 
-// Why: box-only scenes get the tensor-product grid once and refine it globally (nested
-// meshes); scenes with curved shapes are meshed by Gmsh anew for every level (scene_mesh.h).
-// The DoFHandler is rebuilt with a new mesh: a triangulation cannot be cleared under it.
+namespace {
+// Unknowns of a Q2 vector field on n cells, roughly: 2^dim nodes per cell, dim components.
+double estimated_dofs(const int dim, const double cells) {
+  return dim * std::pow(2., dim) * cells;
+}
+} // namespace
+
+// Why: the budget of unknowns on the finest level: a few seconds for --coarse (3D 6e4, 2D
+// 1.5e5), a minute or two on one core otherwise (3D 3e5, 2D 6e5).
 template <int dim>
-void SceneReference<dim>::make_grid(const unsigned int level) {
-  if (level == 0)
-    base_size = base_cell_size(problem);
-  const double h = base_size / std::pow(2., level);
+double SceneReference<dim>::budget() const {
+  if (options.coarse)
+    return dim == 3 ? 6e4 : 1.5e5;
+  return dim == 3 ? 3e5 : 6e5;
+}
+
+template <int dim>
+void SceneReference<dim>::mesh(const double h0, const unsigned int level) {
   if (use_gmsh) {
     dof_handler.reset();
-    gmsh_mesh(problem, base_size, level, options.output_directory / "mesh.msh", triangulation);
-  } else if (level == 0)
-    box_grid(problem, h, triangulation);
-  else
+    gmsh_mesh(problem, h0, level, options.output_directory / "mesh.msh", triangulation);
+  } else if (level == 0) {
+    dof_handler.reset();
+    box_grid(problem, h0, triangulation);
+  } else
     triangulation.refine_global(1);
   if (!dof_handler)
     dof_handler = std::make_unique<DoFHandler<dim>>(triangulation);
 }
 
-// Why: the default sequence ends at the last level whose Q2 system stays within a budget of
-// unknowns (3D 3e5, 2D 6e5: a minute or two on one core), with at least three levels for
-// Richardson extrapolation; --coarse runs three levels, --levels N exactly N.
+// Why: box-only scenes get the tensor-product grid once and refine it globally (nested
+// meshes); scenes with curved shapes are meshed by Gmsh for every level (scene_mesh.h). The
+// level-0 size starts at the thinnest part of the body and doubles while three levels would
+// exceed the budget (thin layers keep their one cell across: the grid planes and Gmsh's
+// features bound the mesh from below). The DoFHandler is rebuilt with a new mesh: a
+// triangulation cannot be cleared under it.
+template <int dim>
+void SceneReference<dim>::make_grid(const unsigned int level) {
+  if (level > 0) {
+    mesh(base_size, level);
+    return;
+  }
+  base_size = base_cell_size(problem);
+  mesh(base_size, 0);
+  for (int attempt = 0; attempt < 6; ++attempt) {
+    const auto cells = triangulation.n_active_cells();
+    if (estimated_dofs(dim, cells * std::pow(2., 2 * dim)) <= budget())
+      break;
+    mesh(2 * base_size, 0);
+    if (triangulation.n_active_cells() >= cells) { // no coarser mesh: keep the finer one
+      mesh(base_size, 0);
+      break;
+    }
+    base_size *= 2;
+  }
+}
+
+// Why: the default sequence ends at the last level that stays within the budget, with at
+// least three levels for Richardson extrapolation; --coarse runs three levels, --levels N
+// exactly N.
 template <int dim>
 unsigned int SceneReference<dim>::choose_levels() const {
   if (options.levels > 0)
     return options.levels;
   if (options.coarse)
     return 3;
-  const double budget = dim == 3 ? 3e5 : 6e5;
-  const double dofs0 = dim * std::pow(2., dim) * triangulation.n_active_cells();
+  const double dofs0 = estimated_dofs(dim, triangulation.n_active_cells());
   unsigned int n = 1;
-  while (n < 8 && dofs0 * std::pow(2., dim * n) <= budget)
+  while (n < 8 && dofs0 * std::pow(2., dim * n) <= budget())
     ++n;
   return std::max(3u, n);
 }

@@ -57,6 +57,8 @@ private:
   void output_results(double wall_time) const;
 
   unsigned int choose_levels() const;
+  double budget() const;
+  void mesh(double h0, unsigned int level);
   void measure_loads();
   void cell_system(const typename DoFHandler<dim>::active_cell_iterator& cell,
                    FEValues<dim>& fe_values, FullMatrix<double>& cell_matrix,
