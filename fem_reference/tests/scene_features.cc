@@ -12,6 +12,8 @@
 //   symmetry         ν = 0.3, the clamp replaced by symmetry planes x = 0 and y = 0 (whole
 //                    planes): u_x = σx/E, u_y = -νσy/E, σ_xx = σ at a particle, reaction -F.
 //   point-load       as symmetry, the load a point load at (L, H/2): the same far field.
+//   displacement     as symmetry with ν = 0, no load: the box [L - λ, L] displaced by d in
+//                    x (a displacement support): u_x = d x/(L - λ), reactions ±E H t d/(L - λ).
 // Exit 0 if every check passes.
 #include "scene_reference.h"
 
@@ -107,6 +109,26 @@ bool point_load(pd::Scene scene, const std::string& work) {
   return check("point-load: u_x at (0.525, 0.075)", v[0], ux, 1e-6 * ux) &
          check("point-load: reaction x of the planes", v[1], -F, 1e-7 * F);
 }
+bool displacement(pd::Scene scene, const std::string& work) {
+  using Q = pd::ProbeSpec::Quantity;
+  use_symmetry_planes(scene);
+  scene.model.materials.at(0).poisson_ratio = 0.; // else the held box restrains the contraction
+  pd::SupportSpec pull;
+  pull.name = "pull";
+  pull.region = scene.model.loads.at(0).load.region; // the last particle column [1.95, 2]
+  pull.prescribed = {true, false, false};
+  constexpr double d = 1e-4, length = 1.95;
+  pull.displacement = {d, 0., 0.};
+  scene.model.supports.push_back(pull);
+  scene.model.loads.clear();
+  scene.probes = {probe("u_x", Q::displacement, 0), reaction("R_pull", "pull", 0),
+                  reaction("R_sym", "sym", 0)};
+  const auto v = solve(scene, work + "/displacement");
+  const double ux = d * x_p / length, force = E * H * t * d / length;
+  return check("displacement: u_x at (0.525, 0.075)", v[0], ux, 1e-6 * ux) &
+         check("displacement: reaction x of the pulled box", v[1], force, 1e-6 * force) &
+         check("displacement: reaction x of the planes", v[2], -force, 1e-6 * force);
+}
 } // namespace
 
 int main(int argc, char** argv) {
@@ -121,6 +143,7 @@ int main(int argc, char** argv) {
     bool ok = reaction_stress(scene, work);
     ok = symmetry(scene, work) && ok;
     ok = point_load(scene, work) && ok;
+    ok = displacement(scene, work) && ok;
     return ok ? 0 : 1;
   } catch (const std::exception& e) {
     std::cerr << "pd-fem-scene-features: error: " << e.what() << std::endl;
