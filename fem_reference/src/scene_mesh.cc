@@ -212,7 +212,10 @@ void gmsh_mesh(const SceneProblem& problem, const double h0, const unsigned int 
     gmsh::model::addPhysicalGroup(dim, tags, 1);
     // Subdivision halves the cells Gmsh makes: ask for 2h to get h.
     gmsh::option::setNumber("Mesh.MeshSizeMax", 2 * h0);
-    gmsh::option::setNumber("Mesh.MeshSizeFromCurvature", 8.);
+    // The sizes OpenCASCADE gives its points (a fraction of the model) would override h0.
+    gmsh::option::setNumber("Mesh.MeshSizeFromPoints", 0);
+    if (problem.curved)
+      gmsh::option::setNumber("Mesh.MeshSizeFromCurvature", 8.);
     gmsh::option::setNumber("Mesh.ElementOrder", 1);
     if (dim == 2) {
       gmsh::option::setNumber("Mesh.Algorithm", 6); // Frontal-Delaunay (8 crashes in 4.8.4)
