@@ -1,7 +1,11 @@
 // pd verify [CASE...] [-o DIR] [--list] [--sweep] [--scenes DIR] [--threads N]
+// pd verify SCENE.yaml... [--fe-levels N] [--fe-coarse] [--gate FRACTION]
 // Verification cases with their gates: CASE.json in DIR for each, exit code 2 if a gate fails.
+// A scene file instead of a case name runs the scene beside its FE reference (pd-fem --scene).
 #include "commands.hpp"
 #include "libpd/core/atomic_file.hpp"
+#include "libpd/io/scene.hpp"
+#include "scene_verification.hpp"
 #include "verification.hpp"
 
 #include <algorithm>
@@ -23,7 +27,46 @@ struct VerifyArgs {
   bool sweep = false;
   std::string scenes_dir;
   int threads = 0;
+  verification::SceneVerifyOptions scene;
+  int fe_levels = 0;
+  double gate = 0;
 };
+
+bool is_scene_file(const std::string& arg) {
+  const auto ext = std::filesystem::path(arg).extension();
+  return ext == ".yaml" || ext == ".yml";
+}
+
+/// pd verify SCENE.yaml: the scene against its FE reference; exit 1 if it cannot run, 2 if the
+/// gate fails.
+int verify_scenes(const VerifyArgs& a, const verification::Context& ctx) {
+  int failed = 0;
+  for (const std::string& file : a.cases) {
+    fmt::print("== {} — PD vs deal.II on the same continuum problem\n", file);
+    std::fflush(stdout);
+    const auto t0 = std::chrono::steady_clock::now();
+    Json result;
+    try {
+      result = verification::verify_scene(file, ctx, a.scene);
+    } catch (const SceneError& e) {
+      fmt::print(stderr, "{}\n", e.what());
+      return 1;
+    } catch (const std::exception& e) {
+      fmt::print(stderr, "error: {}\n", e.what());
+      return 1;
+    }
+    const double wall =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    result["wall_seconds"] = wall;
+    const std::string name = std::filesystem::path(file).stem().string();
+    write_file_atomically(std::filesystem::path(a.out_dir) / (name + ".json"), result.dump());
+    const bool passed = result.find("passed")->boolean().value_or(false);
+    fmt::print("   {} in {:.1f} s -> {}/{}.json\n", passed ? "PASSED" : "FAILED", wall, a.out_dir,
+               name);
+    failed += passed ? 0 : 1;
+  }
+  return failed > 0 ? 2 : 0;
+}
 
 /// Run one case, write its JSON and say whether its gate passed.
 bool run_case(const verification::Case& c, const verification::Context& ctx,
@@ -56,6 +99,16 @@ int verify(const VerifyArgs& a) {
                                         : std::filesystem::path(a.scenes_dir);
   ctx.output_dir = a.out_dir;
   ctx.progress = ::isatty(STDERR_FILENO) != 0;
+  if (!a.cases.empty() && std::all_of(a.cases.begin(), a.cases.end(), is_scene_file)) {
+    VerifyArgs scene_args = a;
+    if (a.fe_levels > 0) {
+      scene_args.scene.fe_levels = a.fe_levels;
+    }
+    if (a.gate > 0) {
+      scene_args.scene.gate = a.gate;
+    }
+    return verify_scenes(scene_args, ctx);
+  }
   std::vector<const verification::Case*> selected;
   for (const auto& case_name : a.cases) {
     // --sweep runs each named case's accuracy-vs-time sweep, the case CASE-sweep.
@@ -88,13 +141,19 @@ int verify(const VerifyArgs& a) {
 Command add_verify_command(CLI::App& app) {
   auto a = std::make_shared<VerifyArgs>();
   auto* cmd = app.add_subcommand("verify", "Run verification cases; exit code 2 if a gate fails");
-  cmd->add_option("cases", a->cases, "case names (default: all)");
+  cmd->add_option("cases", a->cases,
+                  "case names (default: all), or scene files (.yaml) to verify against FE");
   cmd->add_option("-o,--output", a->out_dir, "output folder")->capture_default_str();
   cmd->add_flag("--list", a->list, "list the cases");
   cmd->add_flag("--sweep", a->sweep,
                 "run the accuracy-vs-time sweep of each named case (the case CASE-sweep): one "
                 "JSON row per run in DIR/CASE-sweep.jsonl");
   cmd->add_option("--scenes", a->scenes_dir, "folder with the shipped scenes");
+  cmd->add_option("--fe-levels", a->fe_levels,
+                  "scene files: number of FE meshes (pd-fem --levels; default its own)");
+  cmd->add_flag("--fe-coarse", a->scene.fe_coarse, "scene files: pd-fem --coarse (quick check)");
+  cmd->add_option("--gate", a->gate,
+                  "scene files: fail (exit 2) if a probe's |PD − FE| / |FE| exceeds this fraction");
   add_threads_option(*cmd, a->threads);
   return {cmd, [a] { return verify(*a); }};
 }

@@ -128,6 +128,14 @@ const std::vector<Case>& all_cases() {
       {"compression-cube",
        "Miranda 5.2.2: C60/75 cube between stiff plates, stress-strain peak vs paper and EC2",
        run_compression_cube},
+      {"symmetry-half-full", "half models on a symmetry plane vs the full models (plate: 0.1 %)",
+       run_symmetry_half_full},
+      {"crack-opening",
+       "2D plate with a central pre-crack: opening vs 4 sigma a / E over three spacings",
+       run_crack_opening},
+      {"fracture-stop",
+       "pre-cracked glass plate pulled to failure: stops on solver.stop_when, failure load",
+       run_fracture_stop},
   });
   return cases;
 }

@@ -1,6 +1,9 @@
 // Probes of a run: binding probe specs to particles and writing their history.
 #include "libpd/app/probes.hpp"
 
+#include "libpd/discretisation/mirror_constraints.hpp"
+
+#include <algorithm>
 #include <cmath>
 #include <fmt/format.h>
 #include <limits>
@@ -8,14 +11,72 @@
 
 namespace pd {
 
+namespace {
+
+/// The particles a support holds in the probe's component (by a fixed or prescribed value).
+std::vector<std::uint32_t> support_particles(const ProbeSpec& p, const Model& model) {
+  const auto spec = std::find_if(model.spec.supports.begin(), model.spec.supports.end(),
+                                 [&](const SupportSpec& s) { return s.name == p.support; });
+  if (spec == model.spec.supports.end()) {
+    throw std::runtime_error("probe '" + p.name + "' reads unknown support '" + p.support + "'");
+  }
+  const int dim = model.spec.dimension.dim;
+  const double tol = 1e-6 * model.spec.lattice.spacing;
+  std::vector<std::uint32_t> out;
+  for (const Constraint& c : model.constraints) {
+    if (c.component == p.component && c.mirror_of == Constraint::no_mirror &&
+        c.particle < model.body_particle_count() &&
+        spec->region.contains(model.particles.position[c.particle], dim, tol)) {
+      out.push_back(c.particle);
+    }
+  }
+  return out;
+}
+
+/// Normal stress σ_cc of particle i from its bond forces, the virial ½ Σ_j f_ij ⊗ ξ_ij V_j
+/// (Lehoucq & Silling 2008 for a homogeneous deformation) with the linearised bond force
+/// c V_j s ξ/|ξ|: exact for the bond-based micro-elastic law at small strain. A bond into a ghost
+/// or clamp dependant counts ½ in the model's energy (ghost_layers.hpp) but whole in the particle's
+/// own stress, so its weight is undone; broken bonds carry nothing, plastic stretch is taken off.
+double normal_stress(const Model& m, const std::vector<std::uint8_t>& dependant, const double* y,
+                     std::size_t i, int component) {
+  const auto c = static_cast<std::size_t>(component);
+  const Vec3& xi0 = m.particles.position[i];
+  double sigma = 0;
+  for (std::size_t k = m.family.offsets[i]; k < m.family.offsets[i + 1]; ++k) {
+    if (!m.state.broken.empty() && m.state.broken[k] != 0) {
+      continue;
+    }
+    const std::size_t j = m.family.neighbour[k];
+    const double inv = m.family.inverse_length[k];
+    double length2 = 0;
+    for (std::size_t a = 0; a < 3; ++a) {
+      const double d = y[3 * j + a] - y[3 * i + a];
+      length2 += d * d;
+    }
+    double s = std::sqrt(length2) * inv - 1.0;
+    if (!m.state.plastic_stretch.empty()) {
+      s -= m.state.plastic_stretch[k];
+    }
+    const double xi_c = m.particles.position[j][c] - xi0[c];
+    const double weight = dependant[j] != 0 && dependant[i] == 0 ? 2.0 : 1.0;
+    sigma += 0.5 * weight * bond_stiffness(m, k) * s * xi_c * xi_c * inv;
+  }
+  return sigma;
+}
+
+} // namespace
+
 std::vector<ResolvedProbe> resolve_probes(const std::vector<ProbeSpec>& probes,
                                           const Model& model) {
   std::vector<ResolvedProbe> out;
   const int dim = model.spec.dimension.dim;
   const double tol = 1e-6 * model.spec.lattice.spacing;
   for (const ProbeSpec& p : probes) {
-    ResolvedProbe r{p.name, p.component, {}};
-    if (p.kind == ProbeSpec::Kind::point) {
+    ResolvedProbe r{p.name, p.component, {}, p.quantity, {}};
+    if (p.kind == ProbeSpec::Kind::support) {
+      r.particles = support_particles(p, model);
+    } else if (p.kind == ProbeSpec::Kind::point) {
       // Nearest particle; ties go to the lowest index so the choice is reproducible.
       double best = std::numeric_limits<double>::max();
       std::uint32_t arg = 0;
@@ -38,6 +99,10 @@ std::vector<ResolvedProbe> resolve_probes(const std::vector<ProbeSpec>& probes,
         }
       }
     }
+    if (p.quantity == ProbeSpec::Quantity::stress) {
+      r.dependant = energy_dependants(model.size(), model.spec.mirror_coupling, model.constraints,
+                                      model.extrapolated);
+    }
     if (r.particles.empty()) {
       throw std::runtime_error("probe '" + p.name + "' selects no particle");
     }
@@ -47,11 +112,30 @@ std::vector<ResolvedProbe> resolve_probes(const std::vector<ProbeSpec>& probes,
 }
 
 double probe_value(const ResolvedProbe& probe, const Simulation& sim) {
+  const Model& model = sim.model();
   double sum = 0;
   for (std::uint32_t i : probe.particles) {
-    sum += sim.displacement(i, probe.component);
+    switch (probe.quantity) {
+    case ProbeSpec::Quantity::displacement:
+      sum += sim.displacement(i, probe.component);
+      break;
+    case ProbeSpec::Quantity::reaction:
+      // The particle is held: the support balances the body's force on it (a load on a held
+      // particle goes straight into the support and is not part of the reaction).
+      sum -= sim.state().force[3 * i + static_cast<std::size_t>(probe.component)] *
+             model.particles.volume[i];
+      break;
+    case ProbeSpec::Quantity::stress:
+      sum += normal_stress(model, probe.dependant, sim.state().position.data(), i, probe.component);
+      break;
+    case ProbeSpec::Quantity::damage:
+      sum += model.state.damage.empty() ? 0.0 : model.state.damage[i];
+      break;
+    }
   }
-  return sum / static_cast<double>(probe.particles.size());
+  return probe.quantity == ProbeSpec::Quantity::reaction
+             ? sum
+             : sum / static_cast<double>(probe.particles.size());
 }
 
 void ProbeHistory::record(const std::vector<ResolvedProbe>& probes, const Simulation& sim) {

@@ -222,9 +222,18 @@ private:
     out_.result = sim_->run([&](const Simulation& s) {
       after_step(s);
       progress.update(s);
-      return !interrupt.requested();
+      return !interrupt.requested() && !failure_seen(s);
     });
     progress.clear();
+    out_.stop_peak = stop_peak_;
+    out_.stop_peak_time = stop_peak_time_;
+    if (!failure_.empty()) {
+      out_.result.status = RunStatus::failed;
+      out_.result.message = failure_;
+      if (scene_.output.history_every > 0) {
+        record(*sim_); // the state at which the run stopped
+      }
+    }
     out_.stop_signal = interrupt.signal();
     out_.evaluations_this_run = out_.result.force_evaluations - evaluations_restored_;
     check_steady_reached();
@@ -243,6 +252,30 @@ private:
       save_checkpoint(s);
     }
     output_->flush_probes_if_stale(out_.history);
+  }
+
+  // solver.stop_when: whether the watched probe shows failure now; if so, says how in failure_.
+  bool failure_seen(const Simulation& s) {
+    const StopWhenSpec& stop = scene_.stop_when;
+    if (!stop.enabled()) {
+      return false;
+    }
+    const auto watched = std::find_if(probes_.begin(), probes_.end(),
+                                      [&](const ResolvedProbe& p) { return p.name == stop.probe; });
+    const double value = std::abs(probe_value(*watched, s));
+    if (value > stop_peak_) {
+      stop_peak_ = value;
+      stop_peak_time_ = s.state().time;
+    }
+    if (stop.drops_below > 0 && stop_peak_ > 0 && value < stop.drops_below * stop_peak_) {
+      failure_ = fmt::format("probe '{}' fell to {:.6g}, below {} of its peak {:.6g} (at t = "
+                             "{:.6g} s): the failure value is the peak",
+                             stop.probe, value, stop.drops_below, stop_peak_, stop_peak_time_);
+    } else if (stop.exceeds > 0 && value > stop.exceeds) {
+      failure_ =
+          fmt::format("probe '{}' reached {:.6g}, above {:.6g}", stop.probe, value, stop.exceeds);
+    }
+    return !failure_.empty();
   }
 
   // Record. One row of probe values at the simulation's current time.
@@ -312,6 +345,9 @@ private:
   Model model_;
   std::unique_ptr<Simulation> sim_; ///< refers to model_, so made after it
   std::vector<ResolvedProbe> probes_;
+  double stop_peak_ = 0;      ///< largest |value| of the stop_when probe so far
+  double stop_peak_time_ = 0; ///< when it was reached
+  std::string failure_;       ///< why stop_when ended the run; empty while it has not
   std::optional<RunOutputWriter> output_;
   std::optional<CheckpointPolicy> checkpoints_;
   std::optional<CheckpointFingerprint> fingerprint_;

@@ -42,6 +42,7 @@ std::uint64_t model_hash(const Model& m) {
   h.add_vector(m.extrapolated.offsets);
   h.add_vector(m.extrapolated.source);
   h.add_vector(m.extrapolated.coefficient);
+  h.add_vector(m.extrapolated.negated);
   h.add_vector(m.external_force_density);
   return h.value();
 }

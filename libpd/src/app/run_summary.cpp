@@ -67,6 +67,24 @@ Json run_summary(const Scene& scene, const Simulation& sim, const RunOutcome& ou
   if (Json details = sim.integrator().summary(); details.is_object()) {
     j["integrator_details"] = std::move(details);
   }
+  if (!scene.model.cracks.empty()) {
+    Json& cj = j["cracks"]; // pairs of particles a crack kept from bonding
+    for (std::size_t c = 0; c < scene.model.cracks.size(); ++c) {
+      cj[scene.model.cracks[c].name]["bonds_not_created"] = model.bonds_cut_by_crack[c];
+    }
+  }
+  for (const LoadSpec& load : scene.model.loads) {
+    if (load.load.kind == BoxRegionLoad::Kind::point) {
+      j["point_loads"][load.name]["particles"] =
+          load_particles(model.spec, model.particles, load, model.body_particle_count()).size();
+    }
+  }
+  if (scene.stop_when.enabled()) {
+    Json& sj = j["stop_when"];
+    sj["probe"] = scene.stop_when.probe;
+    sj["peak"] = out.stop_peak; // the failure value when status is `failed`
+    sj["peak_time"] = out.stop_peak_time;
+  }
   Json& pj = j["probes"];
   pj = Json::object();
   for (const auto& [name, value] : out.probes) {

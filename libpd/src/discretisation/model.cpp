@@ -127,6 +127,20 @@ std::vector<Constraint> support_constraints(const ModelSpec& spec, const Particl
   std::size_t largest = 0, largest_count = 0;
   for (std::size_t s = 0; s < spec.supports.size(); ++s) {
     const SupportSpec& sup = spec.supports[s];
+    if (sup.symmetric()) {
+      // A particle on the plane is its own image: its normal displacement is zero. The sites
+      // beyond the plane are images (symmetry_images).
+      for (std::size_t i = 0; i < std::min(body_particles, particles.size()); ++i) {
+        for (std::uint8_t a = 0; a < 3; ++a) {
+          if (sup.symmetry[a] && std::abs(particles.position[i][a] - sup.symmetry_at[a]) <= tol &&
+              (sup.region.boxes.empty() ||
+               sup.region.contains(particles.position[i], spec.dimension.dim, tol))) {
+            constraints.push_back({{static_cast<std::uint32_t>(i), a, 0.0}, s});
+          }
+        }
+      }
+      continue;
+    }
     const auto members =
         particles_in(particles, sup.region, spec.dimension.dim, tol, body_particles);
     if (members.empty()) {
@@ -302,6 +316,92 @@ void take_material_of_nearest_body_particle(const BondFamily& family, std::size_
   }
 }
 
+/// Symmetry supports: every ghost site beyond a symmetry plane (beyond several: across all of
+/// them) takes the displacement of its image with the normal components negated, instead of the
+/// quadratic fit: the image if it is a body particle, the image's own terms if it is a ghost.
+/// With these, the half model's energy is exactly half the symmetric full model's (bonds into
+/// ghosts count ½), so both have the same equilibrium. Sites without an image keep their fit.
+ExtrapolatedParticles symmetry_images(const ModelSpec& spec, const ParticleSet& particles,
+                                      std::size_t body_count, ExtrapolatedParticles fitted) {
+  struct Plane {
+    std::size_t axis;
+    double at;
+    double side; // the body's side: sign of x_axis − at
+    Region region;
+  };
+  std::vector<Plane> planes;
+  const int dim = spec.dimension.dim;
+  const double tol = region_tolerance(spec);
+  for (const SupportSpec& sup : spec.supports) {
+    for (std::size_t a = 0; a < 3; ++a) {
+      if (sup.symmetry[a]) {
+        double mean = 0;
+        for (std::size_t i = 0; i < body_count; ++i) {
+          mean += particles.position[i][a] - sup.symmetry_at[a];
+        }
+        planes.push_back({a, sup.symmetry_at[a], mean >= 0 ? 1.0 : -1.0, sup.region});
+      }
+    }
+  }
+  if (planes.empty() || fitted.empty()) {
+    return fitted;
+  }
+  // Sites by lattice cell, to find an image.
+  const double h = spec.lattice.spacing;
+  const auto key = [h](const Vec3& p) {
+    return std::array<long long, 3>{std::llround(p[0] / h * 2), std::llround(p[1] / h * 2),
+                                    std::llround(p[2] / h * 2)};
+  };
+  std::map<std::array<long long, 3>, std::uint32_t> index;
+  for (std::size_t i = 0; i < particles.size(); ++i) {
+    index.emplace(key(particles.position[i]), static_cast<std::uint32_t>(i));
+  }
+  std::vector<std::ptrdiff_t> slot(particles.size(), -1); // dependant index of a particle
+  for (std::size_t d = 0; d < fitted.size(); ++d) {
+    slot[fitted.particle[d]] = static_cast<std::ptrdiff_t>(d);
+  }
+  ExtrapolatedParticles out;
+  for (std::size_t d = 0; d < fitted.size(); ++d) {
+    const std::uint32_t p = fitted.particle[d];
+    Vec3 image = particles.position[p];
+    std::uint8_t negated = 0;
+    for (const Plane& pl : planes) {
+      const bool beyond = pl.side * (image[pl.axis] - pl.at) < -tol &&
+                          (pl.region.boxes.empty() || pl.region.contains(image, dim, h));
+      if (beyond) {
+        image[pl.axis] = 2 * pl.at - image[pl.axis];
+        negated = static_cast<std::uint8_t>(negated | (1U << pl.axis));
+      }
+    }
+    const auto found = negated != 0 ? index.find(key(image)) : index.end();
+    std::size_t from = d; // whose terms p takes
+    if (found != index.end() && found->second < body_count) {
+      out.particle.push_back(p);
+      out.source.push_back(found->second);
+      out.coefficient.push_back(1.0);
+      out.offsets.push_back(out.source.size());
+      out.negated.push_back(negated);
+      continue;
+    }
+    if (found != index.end() && slot[found->second] >= 0) {
+      from = static_cast<std::size_t>(slot[found->second]);
+    } else {
+      negated = 0; // no image: the site keeps its own fit
+    }
+    out.particle.push_back(p);
+    for (std::size_t t = fitted.offsets[from]; t < fitted.offsets[from + 1]; ++t) {
+      out.source.push_back(fitted.source[t]);
+      out.coefficient.push_back(fitted.coefficient[t]);
+    }
+    out.offsets.push_back(out.source.size());
+    out.negated.push_back(negated);
+  }
+  if (std::all_of(out.negated.begin(), out.negated.end(), [](std::uint8_t n) { return n == 0; })) {
+    out.negated.clear();
+  }
+  return out;
+}
+
 /// The extrapolated dependants (ghost_layers.hpp): the ghosts, and the particles of mirror
 /// supports under `quadratic` coupling. Particles held by any constraint are never sources.
 ExtrapolatedParticles extrapolated_particles(const ModelSpec& spec, const ParticleSet& particles,
@@ -338,8 +438,10 @@ ExtrapolatedParticles extrapolated_particles(const ModelSpec& spec, const Partic
   if (fitted.empty()) {
     return {};
   }
-  return extrapolation_ties(spec.dimension.dim, spec.lattice.spacing, particles.position, family,
-                            dependent, fitted, clamp_planes(spec));
+  return symmetry_images(spec, particles, body_count,
+                         extrapolation_ties(spec.dimension.dim, spec.lattice.spacing,
+                                            particles.position, family, dependent, fitted,
+                                            clamp_planes(spec)));
 }
 
 /// The loads as force densities [N/m³] per dof (empty without loads): a resultant is shared in
@@ -439,6 +541,39 @@ void drop_bonds_without_stiffness(BondFamily& family, std::vector<double>& facto
   factor = std::move(kept_factor);
 }
 
+/// Pre-cracks: the bonds that cross a crack leave the family (both directions, so it stays
+/// symmetric); returns the pairs each crack removed.
+std::vector<std::size_t> cut_bonds_across_cracks(const ModelSpec& spec, const ParticleSet& ps,
+                                                 BondFamily& family) {
+  std::vector<std::size_t> cut(spec.cracks.size(), 0);
+  if (spec.cracks.empty()) {
+    return cut;
+  }
+  const int dim = spec.dimension.dim;
+  BondFamily kept;
+  kept.offsets.reserve(family.offsets.size());
+  kept.offsets.push_back(0);
+  for (std::size_t i = 0; i + 1 < family.offsets.size(); ++i) {
+    for (std::size_t k = family.offsets[i]; k < family.offsets[i + 1]; ++k) {
+      const std::size_t j = family.neighbour[k];
+      bool crossed = false;
+      for (std::size_t c = 0; c < spec.cracks.size() && !crossed; ++c) {
+        if (spec.cracks[c].cuts(ps.position[i], ps.position[j], dim)) {
+          crossed = true;
+          cut[c] += i < j ? 1 : 0;
+        }
+      }
+      if (!crossed) {
+        kept.neighbour.push_back(family.neighbour[k]);
+        kept.inverse_length.push_back(family.inverse_length[k]);
+      }
+    }
+    kept.offsets.push_back(kept.neighbour.size());
+  }
+  family = std::move(kept);
+  return cut;
+}
+
 void require_material_and_body(const ModelSpec& spec) {
   if (spec.materials.empty() || spec.bodies.empty()) {
     throw std::runtime_error("a model needs at least one material and one body");
@@ -469,6 +604,7 @@ Model build_model(const ModelSpec& spec, ParticleSet particles) {
   m.ghost_count = m.particles.size() - body_count;
   const std::size_t n = m.particles.size();
   m.family = build_bond_family(m.particles.position, dim, delta, spec.horizon_rule);
+  m.bonds_cut_by_crack = cut_bonds_across_cracks(spec, m.particles, m.family);
   take_material_of_nearest_body_particle(m.family, body_count, m.particles);
   m.constraints = support_constraints(spec, m.particles, body_count);
   m.extrapolated = extrapolated_particles(spec, m.particles, body_count, m.family, m.constraints);

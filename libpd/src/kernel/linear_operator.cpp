@@ -77,7 +77,7 @@ void fold(const Model& model, double* v, Sign sign) {
       const std::size_t s = e.source[t];
       const double a = sign(e.coefficient[t]) * volume[p] / volume[s];
       for (std::size_t c = 0; c < 3; ++c) {
-        v[3 * s + c] += a * v[3 * p + c];
+        v[3 * s + c] += sign(e.sign(d, c)) * a * v[3 * p + c];
       }
     }
   }
@@ -104,7 +104,7 @@ void set_extrapolated(const Model& model, double* v) {
       }
     }
     for (std::size_t c = 0; c < 3; ++c) {
-      v[3 * p + c] = acc[c];
+      v[3 * p + c] = e.sign(d, c) * acc[c];
     }
   }
 }

@@ -97,9 +97,9 @@ void apply_constraints(const Model& model, const LoadRamp& ramp, double t, doubl
       }
     }
     for (std::size_t c = 0; c < 3; ++c) {
-      position[3 * p + c] = x[p][c] + du[c];
+      position[3 * p + c] = x[p][c] + e.sign(d, c) * du[c];
       if (velocity != nullptr) {
-        velocity[3 * p + c] = dv[c];
+        velocity[3 * p + c] = e.sign(d, c) * dv[c];
       }
     }
   }

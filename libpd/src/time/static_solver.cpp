@@ -89,7 +89,7 @@ DofMap map_dofs(const Model& m) {
       d.kind[g] = 2;
       d.folds_row[g] = 1;
       for (std::size_t t = e.offsets[k]; t < e.offsets[k + 1]; ++t) {
-        d.terms[g].push_back({3 * e.source[t] + a, e.coefficient[t]});
+        d.terms[g].push_back({3 * e.source[t] + a, e.sign(k, a) * e.coefficient[t]});
       }
     }
   }

@@ -1,6 +1,7 @@
 // Scene parser: every class of bad input is reported as a SceneError at the offending node, valid
 // scenes fill every field, and the generated template is itself a valid scene.
 #include "libpd/io/scene.hpp"
+#include "scene_test_support.hpp"
 
 #include <filesystem>
 #include <fstream>
@@ -9,41 +10,6 @@
 #include <string>
 
 namespace {
-
-/// Scenes are written as R"(<newline>...)": dropping that first newline makes line 1 the first
-/// line shown, so the expected line numbers can be read off the source.
-std::string yaml(const char* text) {
-  return text[0] == '\n' ? std::string(text + 1) : text;
-}
-
-/// Checks that parsing fails at LINE:COLUMN with a message containing `fragment` and a hint.
-::testing::AssertionResult fails_at(const std::string& text, int line, int column,
-                                    const std::string& fragment) {
-  try {
-    pd::parse_scene(text, "s.yaml");
-  } catch (const pd::SceneError& e) {
-    const std::string message = e.what();
-    const std::string where =
-        "s.yaml:" + std::to_string(line) + ":" + std::to_string(column) + ": error: ";
-    if (message.rfind(where, 0) != 0) {
-      return ::testing::AssertionFailure() << "expected '" << where << "', got:\n" << message;
-    }
-    if (e.file() != "s.yaml" || e.mark().line != line || e.mark().column != column) {
-      return ::testing::AssertionFailure() << "SceneError::mark() disagrees with:\n" << message;
-    }
-    if (message.find(fragment) == std::string::npos) {
-      return ::testing::AssertionFailure() << "expected '" << fragment << "' in:\n" << message;
-    }
-    const auto hint = message.find("\n  hint: ");
-    if (hint == std::string::npos || message.size() <= hint + 10) {
-      return ::testing::AssertionFailure() << "no hint in:\n" << message;
-    }
-    return ::testing::AssertionSuccess();
-  } catch (const std::exception& e) {
-    return ::testing::AssertionFailure() << "threw something else than SceneError: " << e.what();
-  }
-  return ::testing::AssertionFailure() << "parsed without error:\n" << text;
-}
 
 // The smallest valid scene, for reference (1D keeps the scenes short):
 constexpr const char* minimal = R"(
@@ -233,7 +199,7 @@ bodies:
 solver:
   end_time: 1
 )"),
-                       9, 5, "missing 'box' or 'boxes' in body 'bar'"));
+                       9, 5, "missing 'box', 'boxes', 'cylinder' or 'sphere' in body 'bar'"));
 }
 
 TEST(SceneParser, BoxAndBoxesTogether) {

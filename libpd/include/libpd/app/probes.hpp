@@ -11,11 +11,15 @@
 
 namespace pd {
 
-/// A probe bound to particles: the mean of one displacement component over them.
+/// A probe bound to particles: the mean of one quantity over them (a displacement component,
+/// the normal stress σ_cc, the damage index), or for a reaction the sum over the support's
+/// particles held in that component.
 struct ResolvedProbe {
   std::string name;
   int component = 0;
   std::vector<std::uint32_t> particles;
+  ProbeSpec::Quantity quantity = ProbeSpec::Quantity::displacement;
+  std::vector<std::uint8_t> dependant; ///< stress: the model's massless dependants
 };
 
 std::vector<ResolvedProbe> resolve_probes(const std::vector<ProbeSpec>& probes, const Model& model);

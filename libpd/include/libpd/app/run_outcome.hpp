@@ -41,7 +41,11 @@ struct RunOutcome {
   /// Force evaluations done by this process: a restart's throughput counts only these, not
   /// those of the run it continued.
   std::size_t evaluations_this_run = 0;
-  int stop_signal = 0;               ///< the signal that interrupted the run, 0 if none
+  int stop_signal = 0; ///< the signal that interrupted the run, 0 if none
+  /// solver.stop_when: the peak |value| of the watched probe (the failure load of a fracture
+  /// test when the run ends `failed`) and the time it was reached.
+  double stop_peak = 0;
+  double stop_peak_time = 0;
   std::vector<std::string> warnings; ///< about the run's set-up (disk space), for the summary
 };
 

@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -155,6 +156,67 @@ struct Region {
     return out;
   }
   bool operator==(const Region&) const = default;
+};
+
+/// A pre-crack: a segment (2D, two vertices) or a planar polygon (3D, three or more vertices in
+/// order). Bonds that cross it are never created.
+struct Crack {
+  std::string name;
+  std::vector<Vec3> vertices;
+
+  /// Whether the segment a–b crosses the crack (touching counts; a bond lying in the crack's
+  /// plane does not cross it).
+  bool cuts(const Vec3& a, const Vec3& b, int dim) const {
+    return dim == 2 ? cuts_2d(a, b) : cuts_3d(a, b);
+  }
+  bool operator==(const Crack&) const = default;
+
+private:
+  static double cross2(const Vec3& o, const Vec3& p, const Vec3& q) {
+    return (p[0] - o[0]) * (q[1] - o[1]) - (p[1] - o[1]) * (q[0] - o[0]);
+  }
+  bool cuts_2d(const Vec3& a, const Vec3& b) const {
+    const Vec3& c = vertices[0];
+    const Vec3& d = vertices[1];
+    const double d1 = cross2(c, d, a);
+    const double d2 = cross2(c, d, b);
+    const double d3 = cross2(a, b, c);
+    const double d4 = cross2(a, b, d);
+    return d1 * d2 <= 0 && d3 * d4 <= 0 && !(d1 == 0 && d2 == 0);
+  }
+  bool cuts_3d(const Vec3& a, const Vec3& b) const {
+    const auto sub = [](const Vec3& p, const Vec3& q) {
+      return Vec3{p[0] - q[0], p[1] - q[1], p[2] - q[2]};
+    };
+    const auto cross = [](const Vec3& p, const Vec3& q) {
+      return Vec3{p[1] * q[2] - p[2] * q[1], p[2] * q[0] - p[0] * q[2], p[0] * q[1] - p[1] * q[0]};
+    };
+    const Vec3 n = cross(sub(vertices[1], vertices[0]), sub(vertices[2], vertices[0]));
+    const double da = dot(n, sub(a, vertices[0]));
+    const double db = dot(n, sub(b, vertices[0]));
+    if (da * db > 0 || da == db) {
+      return false; // both on one side, or the bond lies in the plane
+    }
+    const double t = da / (da - db);
+    const Vec3 x{a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]), a[2] + t * (b[2] - a[2])};
+    // Inside the (convex or not) polygon: the crossing number in the plane's dominant projection.
+    std::size_t u = 0, v = 1;
+    if (std::abs(n[0]) >= std::abs(n[1]) && std::abs(n[0]) >= std::abs(n[2])) {
+      u = 1, v = 2;
+    } else if (std::abs(n[1]) >= std::abs(n[2])) {
+      u = 0, v = 2;
+    }
+    bool inside = false;
+    for (std::size_t i = 0, j = vertices.size() - 1; i < vertices.size(); j = i++) {
+      const Vec3& p = vertices[i];
+      const Vec3& q = vertices[j];
+      if ((p[v] > x[v]) != (q[v] > x[v]) &&
+          x[u] < (q[u] - p[u]) * (x[v] - p[v]) / (q[v] - p[v]) + p[u]) {
+        inside = !inside;
+      }
+    }
+    return inside;
+  }
 };
 
 } // namespace pd

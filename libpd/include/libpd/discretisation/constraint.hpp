@@ -28,15 +28,23 @@ struct Constraint {
 namespace pd {
 
 /// Dependent particles whose displacement is a fixed linear combination of other particles'
-/// displacements, the same in every component: u_d = Σ_k a_k u_{s_k}. Ghost layers outside free
-/// surfaces and the particles of a quadratically extrapolated clamp are of this kind
-/// (discretisation/ghost_layers.hpp). Sources are never dependants themselves, so one pass sets
-/// every dependant and one pass of the transpose folds their forces back.
+/// displacements, the same in every component up to a sign: u_d,c = ±Σ_k a_k u_{s_k},c. Ghost
+/// layers outside free surfaces and the particles of a quadratically extrapolated clamp are of this
+/// kind (discretisation/ghost_layers.hpp). Sources are never dependants themselves, so one pass
+/// sets every dependant and one pass of the transpose folds their forces back.
 struct ExtrapolatedParticles {
   std::vector<std::uint32_t> particle; ///< the dependants, ascending
   std::vector<std::size_t> offsets{0}; ///< terms of dependant d: [offsets[d], offsets[d + 1])
   std::vector<std::uint32_t> source;
   std::vector<double> coefficient;
+  /// Per dependant, bit c set: component c takes the combination negated (the normal component
+  /// of a symmetry image). Empty: no component is negated.
+  std::vector<std::uint8_t> negated;
+
+  /// ±1: the sign component c of dependant d takes.
+  double sign(std::size_t d, std::size_t c) const {
+    return negated.empty() || ((negated[d] >> c) & 1U) == 0 ? 1.0 : -1.0;
+  }
 
   std::size_t size() const { return particle.size(); }
   bool empty() const { return particle.empty(); }

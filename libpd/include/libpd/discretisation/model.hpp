@@ -100,6 +100,7 @@ struct ModelSpec {
   std::vector<BodySpec> bodies;
   std::vector<SupportSpec> supports;
   std::vector<LoadSpec> loads;
+  std::vector<Crack> cracks; ///< pre-cracks: no bond crosses them
   EffectSet effects;
   SurfaceCorrection surface_correction = SurfaceCorrection::none;
   VolumeCorrection volume_correction = VolumeCorrection::none;
@@ -131,6 +132,8 @@ struct Model {
   /// `ghost`); supports, loads, probes and output see only the body particles before them.
   std::size_t ghost_count = 0;
   std::vector<double> external_force_density; ///< 3N, full (unramped) load [N/m³]
+  /// Per crack of spec.cracks: the bonds (pairs) it kept from being created.
+  std::vector<std::size_t> bonds_cut_by_crack;
 
   std::size_t size() const { return particles.size(); }
   std::size_t body_particle_count() const { return particles.size() - ghost_count; }

@@ -57,6 +57,15 @@ struct EnumName<ProbeSpec::Quantity> {
   }};
 };
 
+/// `solver.stop_when`: end a run when a probe shows that the specimen failed, with status
+/// `failed` and exit code 0 (a fracture test that ends by breaking is a result, not an error).
+struct StopWhenSpec {
+  std::string probe;      ///< empty: no criterion
+  double drops_below = 0; ///< stop when |value| < this × its peak |value| so far (0: unused)
+  double exceeds = 0;     ///< stop when |value| > this (0: unused)
+  bool enabled() const { return !probe.empty(); }
+};
+
 struct OutputSpec {
   std::size_t vtu_every = 0;     ///< steps between VTU files; 0: final state only
   std::size_t history_every = 0; ///< steps between probe history rows; 0: no history
@@ -77,6 +86,7 @@ struct Scene {
   std::string title;
   ModelSpec model;
   SolverSpec solver;
+  StopWhenSpec stop_when;
   InitialSpec initial;
   std::vector<ProbeSpec> probes;
   OutputSpec output;

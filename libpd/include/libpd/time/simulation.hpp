@@ -53,16 +53,17 @@ struct InitialSpec {
   Vec3 velocity{0, 0, 0};
 };
 
-enum class RunStatus { end_time, converged, max_steps, unstable, interrupted };
+enum class RunStatus { end_time, converged, max_steps, unstable, interrupted, failed };
 
 template <>
 struct EnumName<RunStatus> {
-  static constexpr NameTable<RunStatus, 5> table{{
+  static constexpr NameTable<RunStatus, 6> table{{
       {"end_time", RunStatus::end_time, "reached solver.end_time"},
       {"converged", RunStatus::converged, "met the steady-state criterion"},
       {"max_steps", RunStatus::max_steps, "stopped at solver.max_steps"},
       {"unstable", RunStatus::unstable, "a displacement exceeded solver.blowup_displacement"},
       {"interrupted", RunStatus::interrupted, "stopped by SIGINT"},
+      {"failed", RunStatus::failed, "the specimen failed: solver.stop_when was met"},
   }};
 };
 std::string to_string(RunStatus status);

@@ -144,9 +144,63 @@ void check_unique(const Reader& r, std::map<std::string, YAML::Node>& seen, cons
   }
 }
 
+namespace {
+
+/// A reaction probe names a support that holds particles by value; a damage probe needs damage.
+void check_probes(const Reader& r, const Scene& scene, const Marks& marks) {
+  const auto& supports = scene.model.supports;
+  for (const auto& [name, node] : marks.reaction_supports) {
+    const auto s = std::find_if(supports.begin(), supports.end(),
+                                [&](const SupportSpec& x) { return x.name == name; });
+    if (s == supports.end()) {
+      std::vector<std::string_view> names;
+      for (const SupportSpec& x : supports) {
+        names.push_back(x.name);
+      }
+      r.fail(node, fmt::format("probe names unknown support '{}'", name),
+             suggestion(name, names, "supports defined"));
+    }
+    if (s->mirrors() || s->symmetric()) {
+      r.fail(node,
+             fmt::format("support '{}' is a mirror or symmetry support, whose reaction is not "
+                         "recorded",
+                         name),
+             "a reaction probe reads a support with 'fixed' or 'displacement' components");
+    }
+  }
+  for (std::size_t i = 0; i < supports.size(); ++i) {
+    if (supports[i].symmetric() && scene.model.surface_correction != SurfaceCorrection::ghost) {
+      r.fail(marks.support_nodes[i],
+             fmt::format("symmetry support '{}' needs the ghost surface correction: the sites "
+                         "beyond the plane are ghosts that take their images' displacements",
+                         supports[i].name),
+             "remove 'model.surface_correction' (the default is ghost) or write 'ghost'");
+    }
+  }
+  if (scene.stop_when.enabled() &&
+      std::none_of(scene.probes.begin(), scene.probes.end(),
+                   [&](const ProbeSpec& p) { return p.name == scene.stop_when.probe; })) {
+    std::vector<std::string_view> names;
+    for (const ProbeSpec& p : scene.probes) {
+      names.push_back(p.name);
+    }
+    r.fail(marks.stop_when_probe,
+           fmt::format("'solver.stop_when' watches unknown probe '{}'", scene.stop_when.probe),
+           suggestion(scene.stop_when.probe, names, "probes defined"));
+  }
+  for (const auto& [quantity, node] : marks.probe_quantities) {
+    if (quantity == ProbeSpec::Quantity::damage && !scene.model.effects.damage) {
+      r.fail(node, "a damage probe needs the damage effect", "add 'damage' to 'effects'");
+    }
+  }
+}
+
+} // namespace
+
 void check_consistency(Reader& r, const Scene& scene, const Marks& marks) {
   check_materials(r, scene.model, marks);
   check_solver(r, scene, marks);
+  check_probes(r, scene, marks);
 }
 
 } // namespace pd::scene

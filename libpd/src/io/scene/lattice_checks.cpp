@@ -221,7 +221,7 @@ void check_regions(const Reader& r, const ModelSpec& model, const Marks& marks) 
     }
     if (nearest > lattice.spacing * (1 + 1e-9)) {
       r.fail(node,
-             fmt::format("probe '{}' is {} m from the nearest body, farther than one spacing ({} "
+             fmt::format("{} is {} m from the nearest body, farther than one spacing ({} "
                          "m)",
                          marks.probe_point_names[i], fmt::format("{:.3g}", nearest),
                          format_number(lattice.spacing)),

@@ -10,6 +10,15 @@ constexpr Key load_keys[] = {
     name_key("unique name of the load", "pull"),
     box_key("region whose particles (of any body) carry the load", "[[0.99, 0, 0], [1, 0.1, 0.1]]"),
     boxes_key("instead of box: a union of boxes", "[[[0.99, 0, 0], [1, 0.1, 0.1]]]"),
+    {.name = "point",
+     .type = Type::vector,
+     .doc = "instead of box: a point load, shared by the body particles nearest the point (the "
+            "run's summary says how many); type 'point' or omitted, value in N",
+     .unit = "m",
+     .example = "[1, 0.05, 0.1]",
+     .need = Need::one_of,
+     .group = 1,
+     .show = Show::commented},
     {.name = "type",
      .type = Type::choice,
      .doc = "total force [N] spread over the region, or a traction per_area [N/m²], per_length "
@@ -43,9 +52,29 @@ void read_loads(Reader& r, ModelSpec& model, Marks& marks) {
     LoadSpec l;
     l.name = *r.string(f, "name");
     check_unique(r, names, l.name, f.find("name")->at(), "load");
-    const Reader::RegionRead region = r.region(f);
-    l.load.region = region.region;
+    Reader::RegionRead region;
+    if (auto point = r.vector(f, "point")) {
+      l.load.point = *point;
+      region.node = f.find("point")->at();
+      marks.probe_points.emplace_back(*point, region.node);
+      marks.probe_point_names.push_back("point load '" + l.name + "'");
+    } else {
+      region = r.region(f);
+      l.load.region = region.region;
+    }
     r.read_bound(f, l);
+    if (f.has("point")) {
+      if (f.has("type") && l.load.kind != BoxRegionLoad::Kind::point) {
+        r.fail(f.find("type")->at(),
+               fmt::format("load '{}' has a 'point', so its type is 'point', not '{}'", l.name,
+                           name_of(l.load.kind)),
+               "remove 'type' or write 'type: point'");
+      }
+      l.load.kind = BoxRegionLoad::Kind::point;
+    } else if (l.load.kind == BoxRegionLoad::Kind::point) {
+      r.fail(f.find("type")->at(), fmt::format("load '{}' of type point needs 'point'", l.name),
+             "replace 'box' with 'point: [x, y, z]'");
+    }
     r.check_in_space(f.find("value")->at(), f.label("value"), l.load.value);
     const bool needs_measure = l.load.kind == BoxRegionLoad::Kind::per_area ||
                                l.load.kind == BoxRegionLoad::Kind::per_length;
@@ -64,8 +93,10 @@ void read_loads(Reader& r, ModelSpec& model, Marks& marks) {
                          l.load.kind == BoxRegionLoad::Kind::per_area ? "area [m²]" : "length [m]"),
              "add e.g. 'measure: 0.01'");
     }
-    marks.must_touch_bodies.push_back(
-        {l.load.region, region.node, fmt::format("load '{}' acts on no particle", l.name)});
+    if (l.load.kind != BoxRegionLoad::Kind::point) {
+      marks.must_touch_bodies.push_back(
+          {l.load.region, region.node, fmt::format("load '{}' acts on no particle", l.name)});
+    }
     model.loads.push_back(std::move(l));
   }
 }

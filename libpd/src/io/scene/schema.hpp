@@ -27,6 +27,7 @@ enum class Type {
   matrix,           ///< rows of vectors
   box,              ///< [[lo], [hi]]
   boxes,            ///< list of boxes (union)
+  points,           ///< list of points
   components,       ///< list of x | y | z
   component_values, ///< map x | y | z → number
   names,            ///< list of words of `choices`
@@ -105,6 +106,7 @@ extern const Section lattice_section;
 extern const Section material_section;
 extern const Section body_section;
 extern const Section shape_section;
+extern const Section crack_section;
 extern const Section cylinder_section;
 extern const Section sphere_section;
 extern const Section half_space_section;
@@ -114,6 +116,7 @@ extern const Section model_section;
 extern const Section solver_section;
 extern const Section steady_section;
 extern const Section arkode_section;
+extern const Section stop_when_section;
 extern const Section initial_section;
 extern const Section probe_section;
 extern const Section output_section;

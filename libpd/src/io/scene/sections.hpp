@@ -74,8 +74,11 @@ struct Marks {
   std::vector<RegionUse> must_have_particles;          ///< bodies
   std::vector<RegionUse> must_touch_bodies;            ///< supports, loads, region probes
   std::vector<std::pair<Vec3, YAML::Node>> probe_points;
-  std::vector<std::string> probe_point_names;
+  std::vector<std::string> probe_point_names; ///< "probe 'tip'", "point load 'P'"
   YAML::Node damping_effect;
+  std::vector<std::pair<std::string, YAML::Node>> reaction_supports; ///< support named by a probe
+  std::vector<std::pair<ProbeSpec::Quantity, YAML::Node>> probe_quantities;
+  YAML::Node stop_when_probe; ///< the probe solver.stop_when watches
 };
 
 void read_top_level(const YAML::Node& root, Reader& r, Scene& scene, Marks& marks);
@@ -84,13 +87,15 @@ void read_materials(Reader& r, ModelSpec& model, Marks& marks);
 void read_bodies(Reader& r, ModelSpec& model, Marks& marks);
 /// A body's `cylinder` or `sphere`, if it has one instead of boxes (shapes.cpp).
 std::optional<Shape> read_body_shape(Reader& r, const Fields& f);
+/// The `cracks` list (shapes.cpp).
+void read_cracks(Reader& r, ModelSpec& model, Marks& marks);
 /// A body's `minus` list: the shapes taken out of it.
 std::vector<Shape> read_minus(Reader& r, const Fields& f);
 void read_supports(Reader& r, ModelSpec& model, Marks& marks);
 void read_loads(Reader& r, ModelSpec& model, Marks& marks);
 /// `effects` and the `model` section.
 void read_model_options(Reader& r, ModelSpec& model, Marks& marks);
-void read_solver(Reader& r, SolverSpec& solver, Marks& marks);
+void read_solver(Reader& r, SolverSpec& solver, StopWhenSpec& stop_when, Marks& marks);
 void read_initial(Reader& r, InitialSpec& initial, const Marks& marks);
 void read_probes(Reader& r, std::vector<ProbeSpec>& probes, Marks& marks);
 void read_output(Reader& r, OutputSpec& output, Marks& marks);

@@ -2,6 +2,8 @@
 // shapes taken out of it (holes, notches, cuts). The geometry itself is core/geometry.hpp.
 #include "sections.hpp"
 
+#include <cmath>
+
 namespace pd::scene {
 
 namespace {
@@ -120,6 +122,83 @@ Shape read_round(Reader& r, const Fields& parent, std::string_view key) {
 } // namespace
 
 constinit const Section shape_section{"in a shape of 'minus'", shape_keys};
+
+namespace {
+
+constexpr Key crack_keys[] = {
+    name_key("unique name of the crack", "notch"),
+    {.name = "segment",
+     .type = Type::points,
+     .doc = "2D: the crack as a segment [[x0, y0], [x1, y1]]",
+     .unit = "m",
+     .example = "[[0.45, 0.1], [0.55, 0.1]]",
+     .need = Need::one_of,
+     .group = 1,
+     .only_dim = 2},
+    {.name = "polygon",
+     .type = Type::points,
+     .doc = "3D: the crack as a planar polygon, its vertices in order",
+     .unit = "m",
+     .example = "[[0.45, 0, 0.1], [0.55, 0, 0.1], [0.55, 0.1, 0.1], [0.45, 0.1, 0.1]]",
+     .need = Need::one_of,
+     .group = 1,
+     .only_dim = 3,
+     .show = Show::commented},
+};
+
+} // namespace
+
+constinit const Section crack_section{"in a crack", crack_keys};
+
+void read_cracks(Reader& r, ModelSpec& model, Marks& marks) {
+  std::map<std::string, YAML::Node> names;
+  const auto list = r.items(marks.top, "cracks");
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    const Fields f = r.item(list[i], crack_section, "crack", "cracks", i);
+    Crack c;
+    c.name = *r.string(f, "name");
+    check_unique(r, names, c.name, f.find("name")->at(), "crack");
+    const std::string_view key = r.dim == 2 ? "segment" : "polygon";
+    const Entry* e = r.lookup(f, key);
+    if (e == nullptr) {
+      r.fail(f.anchor, fmt::format("crack '{}' needs '{}' in a {}D scene", c.name, key, r.dim),
+             fmt::format("add {}", example_line(key_of(crack_section, key))));
+    }
+    const YAML::Node n = e->at();
+    const std::size_t want = r.dim == 2 ? 2 : 3;
+    if (!n.IsSequence() || n.size() < want || (r.dim == 2 && n.size() != 2)) {
+      r.fail(n,
+             fmt::format("{} must be a list of {} points, got {}", f.label(key),
+                         r.dim == 2 ? "two" : "three or more", describe(n)),
+             fmt::format("write e.g. {}", example_line(*e->key)));
+    }
+    for (std::size_t k = 0; k < n.size(); ++k) {
+      c.vertices.push_back(
+          r.coordinates(n[k], fmt::format("point {} of {}", k + 1, f.label(key)), "m"));
+    }
+    if (r.dim == 3) {
+      const Vec3& a = c.vertices[0];
+      const Vec3& b = c.vertices[1];
+      const Vec3& d = c.vertices[2];
+      const Vec3 u{b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+      const Vec3 v{d[0] - a[0], d[1] - a[1], d[2] - a[2]};
+      const Vec3 normal{u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2],
+                        u[0] * v[1] - u[1] * v[0]};
+      const double scale = norm(u) * norm(v);
+      for (const Vec3& p : c.vertices) {
+        const Vec3 w{p[0] - a[0], p[1] - a[1], p[2] - a[2]};
+        if (!(scale > 0) || std::abs(dot(normal, w)) > 1e-9 * scale * (norm(w) + norm(u))) {
+          r.fail(n,
+                 fmt::format("the polygon of crack '{}' is not planar (or its first three "
+                             "vertices are in line)",
+                             c.name),
+                 "give the vertices of a flat polygon, in order around it");
+        }
+      }
+    }
+    model.cracks.push_back(std::move(c));
+  }
+}
 
 std::optional<Shape> read_body_shape(Reader& r, const Fields& f) {
   for (std::string_view key : {"cylinder", "sphere"}) {

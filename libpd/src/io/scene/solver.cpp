@@ -112,6 +112,35 @@ constexpr Key solver_keys[] = {
      .doc = "options of the arkode integrator (SUNDIALS ARKode ERKStep)",
      .show = Show::commented,
      .section = &arkode_section},
+    {.name = "stop_when",
+     .type = Type::section,
+     .doc = "a failure criterion on a probe: the run stops with status 'failed' and exit code 0",
+     .show = Show::commented,
+     .section = &stop_when_section},
+};
+
+constexpr Key stop_when_keys[] = {
+    {.name = "probe",
+     .type = Type::string,
+     .doc = "name of the probe watched, checked after every step",
+     .example = "reaction",
+     .need = Need::required},
+    {.name = "drops_below",
+     .type = Type::number,
+     .doc = "stop once |value| falls below this fraction of its peak |value| so far (a reaction "
+            "after the specimen broke)",
+     .range = {0, 1, true, true},
+     .example = "0.5",
+     .need = Need::one_of,
+     .group = 1},
+    {.name = "exceeds",
+     .type = Type::number,
+     .doc = "stop once |value| exceeds this level (damage, a displacement), in the probe's unit",
+     .range = positive,
+     .example = "0.3",
+     .need = Need::one_of,
+     .group = 1,
+     .show = Show::commented},
 };
 
 } // namespace
@@ -119,8 +148,9 @@ constexpr Key solver_keys[] = {
 constinit const Section steady_section{"under 'solver.steady'", steady_keys};
 constinit const Section arkode_section{"under 'solver.arkode'", arkode_keys};
 constinit const Section solver_section{"under 'solver'", solver_keys};
+constinit const Section stop_when_section{"under 'solver.stop_when'", stop_when_keys};
 
-void read_solver(Reader& r, SolverSpec& solver, Marks& marks) {
+void read_solver(Reader& r, SolverSpec& solver, StopWhenSpec& stop_when, Marks& marks) {
   marks.solver = r.section(marks.top, "solver");
   r.read_bound(marks.solver, solver);
   if (marks.solver.has("steady")) {
@@ -130,6 +160,13 @@ void read_solver(Reader& r, SolverSpec& solver, Marks& marks) {
   }
   if (marks.solver.has("arkode")) {
     r.read_bound(r.section(marks.solver, "arkode"), solver.arkode);
+  }
+  if (marks.solver.has("stop_when")) {
+    const Fields f = r.section(marks.solver, "stop_when");
+    stop_when.probe = *r.string(f, "probe");
+    marks.stop_when_probe = f.find("probe")->at();
+    stop_when.drops_below = r.number(f, "drops_below").value_or(0.0);
+    stop_when.exceeds = r.number(f, "exceeds").value_or(0.0);
   }
 }
 

@@ -8,10 +8,19 @@ namespace pd::scene {
 
 namespace {
 
+/// Supports may leave out their region (symmetry planes).
+constexpr Key optional_region(Key k) {
+  k.need = Need::optional;
+  return k;
+}
+
 constexpr Key support_keys[] = {
     name_key("unique name of the support", "clamp"),
-    box_key("region whose particles (of any body) are supported", "[[0, 0, 0], [0.03, 0.1, 0.1]]"),
-    boxes_key("instead of box: a union of boxes", "[[[0, 0, 0], [0.03, 0.1, 0.1]]]"),
+    optional_region(box_key("region whose particles (of any body) are supported; required "
+                            "except for a symmetry support (whole plane if omitted)",
+                            "[[0, 0, 0], [0.03, 0.1, 0.1]]")),
+    optional_region(
+        boxes_key("instead of box: a union of boxes", "[[[0, 0, 0], [0.03, 0.1, 0.1]]]")),
     {.name = "fixed",
      .type = Type::components,
      .doc = "components held at zero displacement",
@@ -33,6 +42,16 @@ constexpr Key support_keys[] = {
      .unit = "m",
      .example = "{x: 0}",
      .show = Show::commented},
+    {.name = "symmetry",
+     .type = Type::component_values,
+     .doc = "symmetry planes (x = value, ...) of a half (quarter, ...) model: the sites beyond the "
+            "plane take their image's displacement with the normal component negated, so the "
+            "normal displacement vanishes on the plane and the tangential one is free (a roller "
+            "on a whole face is the same condition); the body lies on one side; needs the ghost "
+            "surface correction (the default)",
+     .unit = "m",
+     .example = "{x: 0}",
+     .show = Show::commented},
 };
 
 } // namespace
@@ -47,8 +66,11 @@ void read_supports(Reader& r, ModelSpec& model, Marks& marks) {
     SupportSpec s;
     s.name = *r.string(f, "name");
     check_unique(r, names, s.name, f.find("name")->at(), "support");
-    const Reader::RegionRead region = r.region(f);
-    s.region = region.region;
+    Reader::RegionRead region;
+    if (f.has("box") || f.has("boxes")) {
+      region = r.region(f);
+      s.region = region.region;
+    }
     r.read_bound(f, s);
     std::array<YAML::Node, 3> nodes;
     const auto displacement = r.component_values(f, "displacement", nodes);
@@ -69,11 +91,21 @@ void read_supports(Reader& r, ModelSpec& model, Marks& marks) {
     }
     std::array<YAML::Node, 3> mirror_nodes;
     const auto mirror = r.component_values(f, "mirror", mirror_nodes);
-    marks.support_nodes.push_back(f.has("mirror") ? f.find("mirror")->at() : f.anchor);
+    marks.support_nodes.push_back(f.has("mirror")     ? f.find("mirror")->at()
+                                  : f.has("symmetry") ? f.find("symmetry")->at()
+                                                      : f.anchor);
     for (int c = 0; c < 3; ++c) {
       if (mirror[c]) {
         s.mirror[c] = true;
         s.mirror_at[c] = *mirror[c];
+      }
+    }
+    std::array<YAML::Node, 3> symmetry_nodes;
+    const auto symmetry = r.component_values(f, "symmetry", symmetry_nodes);
+    for (int c = 0; c < 3; ++c) {
+      if (symmetry[c]) {
+        s.symmetry[c] = true;
+        s.symmetry_at[c] = *symmetry[c];
       }
     }
     const bool holds =
@@ -85,10 +117,26 @@ void read_supports(Reader& r, ModelSpec& model, Marks& marks) {
              "a mirror support moves all three components with the body: remove 'fixed' and "
              "'displacement', or 'mirror'");
     }
-    if (!holds && !s.mirrors()) {
+    if (s.symmetric() && (holds || s.mirrors())) {
+      r.fail(f.find("symmetry")->at(),
+             fmt::format("support '{}' is a symmetry plane and also fixes, displaces or mirrors",
+                         s.name),
+             "give the symmetry plane its own support");
+    }
+    if (!holds && !s.mirrors() && !s.symmetric()) {
       r.fail(f.anchor,
              fmt::format("support '{}' neither fixes nor displaces any component", s.name),
-             "add 'fixed: [x, ...]', 'displacement: {x: value}' or 'mirror: {x: value}'");
+             "add 'fixed: [x, ...]', 'displacement: {x: value}', 'mirror: {x: value}' or "
+             "'symmetry: {x: value}'");
+    }
+    if (!f.has("box") && !f.has("boxes") && !s.symmetric()) {
+      r.fail(f.anchor, fmt::format("missing 'box' or 'boxes' in support '{}'", s.name),
+             "add the region whose particles are supported, e.g. 'box: [[lo], [hi]]' (only a "
+             "symmetry support may leave it out)");
+    }
+    if (s.region.boxes.empty()) {
+      model.supports.push_back(std::move(s));
+      continue;
     }
     marks.must_touch_bodies.push_back(
         {s.region, region.node,

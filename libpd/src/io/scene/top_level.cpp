@@ -68,6 +68,11 @@ constexpr Key root_keys[] = {
      .doc = "fixed or prescribed displacements",
      .section = &support_section},
     {.name = "loads", .type = Type::list, .doc = "external forces", .section = &load_section},
+    {.name = "cracks",
+     .type = Type::list,
+     .doc = "pre-cracks: no bond crosses them",
+     .show = Show::commented,
+     .section = &crack_section},
     {.name = "effects",
      .type = Type::names,
      .doc = "effects to simulate; damage needs fracture_energy or critical_stretch, plasticity "
@@ -116,8 +121,9 @@ Scene read_scene(const YAML::Node& root, Reader& r) {
   read_bodies(r, scene.model, marks);
   read_supports(r, scene.model, marks);
   read_loads(r, scene.model, marks);
+  read_cracks(r, scene.model, marks);
   read_model_options(r, scene.model, marks);
-  read_solver(r, scene.solver, marks);
+  read_solver(r, scene.solver, scene.stop_when, marks);
   read_initial(r, scene.initial, marks);
   read_probes(r, scene.probes, marks);
   read_output(r, scene.output, marks);

@@ -1,0 +1,359 @@
+// Scene keys of issue 19: shapes and holes, pre-cracks, point loads, symmetry supports, reaction,
+// stress and damage probes, and solver.stop_when. Each class of bad input is refused at its node;
+// valid scenes fill the fields and build the model they describe.
+#include "libpd/app/run.hpp"
+#include "libpd/io/scene.hpp"
+#include "scene_test_support.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <gtest/gtest.h>
+#include <string>
+
+namespace {
+
+/// A 2D plate, 20 × 10 spacings, to which each test appends its own lines.
+std::string plate(const std::string& more) {
+  return yaml(R"(
+dimension: 2
+plane: stress
+thickness: 0.01
+lattice:
+  spacing: 0.01
+materials:
+  steel:
+    youngs_modulus: 200e9
+    density: 7800
+bodies:
+  - name: plate
+    material: steel
+    box: [[0, 0], [0.2, 0.1]]
+)") + more;
+}
+
+constexpr const char* solver = R"(solver:
+  integrator: static
+)";
+
+TEST(SceneGeometry, HoleRemovesTheParticlesInside) {
+  const pd::Scene s = pd::parse_scene(plate(R"(    minus:
+      - cylinder: {centre: [0.1, 0.05], radius: 0.02}
+)") + solver,
+                                      "s.yaml");
+  ASSERT_EQ(s.model.bodies[0].region.minus.size(), 1u);
+  const pd::Model m = pd::build_model(s);
+  // Cell centres within 0.02 of (0.1, 0.05): the 12 of the 4 × 4 block around the centre that
+  // lie inside the circle (the 4 corners at distance 0.0212 stay).
+  EXPECT_EQ(m.body_particle_count(), 200u - 12u);
+}
+
+TEST(SceneGeometry, CylinderBodyNeedsALengthIn3D) {
+  EXPECT_TRUE(fails_at(yaml(R"(
+dimension: 3
+lattice:
+  spacing: 0.01
+materials:
+  m:
+    youngs_modulus: 1e9
+    density: 1000
+bodies:
+  - name: rod
+    material: m
+    cylinder: {centre: [0, 0, 0], radius: 0.05}
+solver:
+  integrator: static
+)"),
+                       11, 15, "the cylinder of body 'rod' is unbounded"));
+}
+
+TEST(SceneGeometry, TwoDimensionalCylinderRunsAlongZ) {
+  EXPECT_TRUE(fails_at(plate(R"(    minus:
+      - cylinder: {centre: [0.1, 0.05], radius: 0.02, axis: x}
+)") + solver,
+                       15, 61, "in a 2D scene a cylinder runs along z"));
+}
+
+TEST(SceneGeometry, MinusShapeNeedsExactlyOneKind) {
+  EXPECT_TRUE(fails_at(plate(R"(    minus:
+      - {}
+)") + solver,
+                       15, 9, "missing 'box', 'cylinder', 'sphere' or 'half_space'"));
+}
+
+TEST(SceneGeometry, HalfSpaceNeedsANormal) {
+  EXPECT_TRUE(fails_at(plate(R"(    minus:
+      - half_space: {point: [0.1, 0.05], normal: [0, 0]}
+)") + solver,
+                       15, 50, "the normal of a half_space is zero"));
+}
+
+TEST(SceneGeometry, OverlappingShapedBodiesOfDifferentMaterials) {
+  EXPECT_TRUE(fails_at(yaml(R"(
+dimension: 2
+plane: stress
+thickness: 0.01
+lattice:
+  spacing: 0.01
+materials:
+  steel: {youngs_modulus: 200e9, density: 7800}
+  soft: {youngs_modulus: 1e9, density: 1000}
+bodies:
+  - name: plate
+    material: steel
+    box: [[0, 0], [0.2, 0.1]]
+  - name: inclusion
+    material: soft
+    cylinder: {centre: [0.1, 0.05], radius: 0.02}
+solver:
+  integrator: static
+)"),
+                       15, 15, "bodies 'plate' and 'inclusion' overlap"));
+}
+
+TEST(SceneGeometry, CrackCutsTheBondsThatCrossIt) {
+  const pd::Scene s = pd::parse_scene(plate(R"(cracks:
+  - name: c
+    segment: [[0.05, 0.05], [0.15, 0.05]]
+)") + solver,
+                                      "s.yaml");
+  ASSERT_EQ(s.model.cracks.size(), 1u);
+  // The bare model: with ghosts and gradient weights, bonds of zero weight leave the family
+  // whether a crack crosses them or not, and the count below would not add up.
+  pd::ModelSpec spec = s.model;
+  spec.surface_correction = pd::SurfaceCorrection::none;
+  spec.volume_correction = pd::VolumeCorrection::none;
+  const pd::Model with = pd::build_model(spec);
+  pd::ModelSpec uncracked = spec;
+  uncracked.cracks.clear();
+  const pd::Model without = pd::build_model(uncracked);
+  ASSERT_EQ(with.bonds_cut_by_crack.size(), 1u);
+  EXPECT_GT(with.bonds_cut_by_crack[0], 0u);
+  EXPECT_EQ(with.family.bond_count() + with.bonds_cut_by_crack[0], without.family.bond_count());
+}
+
+TEST(SceneGeometry, CrackSegmentNeedsTwoPoints) {
+  EXPECT_TRUE(fails_at(plate(R"(cracks:
+  - name: c
+    segment: [[0.05, 0.05]]
+)") + solver,
+                       16, 14, "must be a list of two points"));
+}
+
+TEST(SceneGeometry, CrackPolygonMustBePlanar) {
+  EXPECT_TRUE(fails_at(yaml(R"(
+dimension: 3
+lattice:
+  spacing: 0.01
+materials:
+  m:
+    youngs_modulus: 1e9
+    density: 1000
+bodies:
+  - name: b
+    material: m
+    box: [[0, 0, 0], [0.1, 0.1, 0.1]]
+cracks:
+  - name: c
+    polygon: [[0, 0, 0.05], [0.1, 0, 0.05], [0.1, 0.1, 0.05], [0, 0.1, 0.06]]
+solver:
+  integrator: static
+)"),
+                       14, 14, "is not planar"));
+}
+
+TEST(SceneGeometry, PointLoadSharedByTheNearestParticles) {
+  const pd::Scene s = pd::parse_scene(plate(R"(supports:
+  - name: clamp
+    box: [[0, 0], [0.01, 0.1]]
+    fixed: [x, y]
+loads:
+  - name: p
+    point: [0.2, 0.05]
+    value: [0, -100]
+)") + solver,
+                                      "s.yaml");
+  EXPECT_EQ(s.model.loads[0].load.kind, pd::BoxRegionLoad::Kind::point);
+  const pd::Model m = pd::build_model(s);
+  // (0.2, 0.05) lies on the face between the particles at y = 0.045 and 0.055.
+  const auto members =
+      pd::load_particles(s.model, m.particles, s.model.loads[0], m.body_particle_count());
+  ASSERT_EQ(members.size(), 2u);
+  double total = 0;
+  for (std::size_t i = 0; i < m.body_particle_count(); ++i) {
+    total += m.external_force_density[3 * i + 1] * m.particles.volume[i];
+  }
+  EXPECT_NEAR(total, -100, 1e-9);
+}
+
+TEST(SceneGeometry, PointLoadOfAnotherType) {
+  EXPECT_TRUE(fails_at(plate(R"(loads:
+  - name: p
+    point: [0.2, 0.05]
+    type: per_area
+    value: [0, -100]
+)") + solver,
+                       17, 11, "its type is 'point'"));
+}
+
+TEST(SceneGeometry, PointLoadFarFromTheBody) {
+  EXPECT_TRUE(fails_at(plate(R"(loads:
+  - name: p
+    point: [0.5, 0.05]
+    value: [0, -100]
+)") + solver,
+                       16, 12, "point load 'p' is"));
+}
+
+TEST(SceneGeometry, ReactionProbeNeedsASupport) {
+  EXPECT_TRUE(fails_at(plate(R"(probes:
+  - name: r
+    point: [0.1, 0.05]
+    quantity: reaction
+)") + solver,
+                       17, 15, "records a reaction but names no 'support'"));
+}
+
+TEST(SceneGeometry, ReactionProbeOfAnUnknownSupport) {
+  EXPECT_TRUE(fails_at(plate(R"(supports:
+  - name: clamp
+    box: [[0, 0], [0.01, 0.1]]
+    fixed: [x, y]
+probes:
+  - name: r
+    support: clamb
+)") + solver,
+                       20, 14, "unknown support 'clamb'"));
+}
+
+TEST(SceneGeometry, ReactionProbeOfAMirrorSupport) {
+  EXPECT_TRUE(fails_at(plate(R"(  - name: grip
+    material: steel
+    box: [[-0.04, 0], [0, 0.1]]
+supports:
+  - name: clamp
+    box: [[-0.04, 0], [0, 0.1]]
+    mirror: {x: 0}
+probes:
+  - name: r
+    support: clamp
+)") + solver,
+                       23, 14, "mirror or symmetry support"));
+}
+
+TEST(SceneGeometry, DamageProbeNeedsDamage) {
+  EXPECT_TRUE(fails_at(plate(R"(probes:
+  - name: d
+    point: [0.1, 0.05]
+    quantity: damage
+)") + solver,
+                       17, 15, "a damage probe needs the damage effect"));
+}
+
+TEST(SceneGeometry, SymmetrySupportNeedsNoRegionButNothingElse) {
+  const pd::Scene s = pd::parse_scene(plate(R"(supports:
+  - name: sym
+    symmetry: {x: 0}
+  - name: pin
+    box: [[0, 0], [0.2, 0.01]]
+    fixed: [y]
+)") + solver,
+                                      "s.yaml");
+  EXPECT_TRUE(s.model.supports[0].symmetric());
+  EXPECT_TRUE(fails_at(plate(R"(supports:
+  - name: sym
+    symmetry: {x: 0}
+    fixed: [y]
+)") + solver,
+                       16, 15, "is a symmetry plane and also fixes"));
+  EXPECT_TRUE(fails_at(plate(R"(supports:
+  - name: clamp
+    fixed: [y]
+)") + solver,
+                       15, 5, "missing 'box' or 'boxes' in support 'clamp'"));
+}
+
+TEST(SceneGeometry, SymmetryNeedsGhosts) {
+  EXPECT_TRUE(fails_at(plate(R"(supports:
+  - name: sym
+    symmetry: {x: 0}
+model:
+  surface_correction: none
+)") + solver,
+                       16, 15, "needs the ghost surface correction"));
+}
+
+TEST(SceneGeometry, StopWhenWatchesAKnownProbe) {
+  EXPECT_TRUE(fails_at(plate(R"(solver:
+  integrator: static
+  stop_when: {probe: forse, drops_below: 0.5}
+probes:
+  - name: force
+    point: [0.1, 0.05]
+)"),
+                       16, 22, "watches unknown probe 'forse'"));
+  EXPECT_TRUE(fails_at(plate(R"(solver:
+  integrator: static
+  stop_when: {probe: force, drops_below: 1.5}
+probes:
+  - name: force
+    point: [0.1, 0.05]
+)"),
+                       16, 42, "drops_below"));
+}
+
+/// A half plate with a symmetry plane gives the full plate's answer: a plate stretched by grips
+/// at both ends, against its right half with the plane x = 0 (on cell faces, as the lattice puts
+/// a box's faces) and one grip.
+TEST(SceneGeometry, SymmetryHalfModelMatchesTheFullModel) {
+  const auto run = [](const std::string& body_and_supports) {
+    const std::string text = yaml(R"(
+dimension: 2
+plane: stress
+thickness: 0.01
+lattice:
+  spacing: 0.01
+materials:
+  steel: {youngs_modulus: 200e9, density: 7800}
+bodies:
+  - name: plate
+    material: steel
+)") + body_and_supports + R"(  - name: right-grip
+    box: [[0.19, 0], [0.2, 0.1]]
+    displacement: {x: 1e-5}
+    fixed: [y]
+solver:
+  integrator: static
+probes:
+  - name: u
+    point: [0.105, 0.075]
+    component: x
+  - name: v
+    point: [0.055, 0.095]
+    component: y
+  - name: force
+    support: right-grip
+    component: x
+)";
+    return pd::run_scene(pd::parse_scene(text, "s.yaml"), pd::RunOptions{}).probes;
+  };
+  const auto full = run(R"(    box: [[-0.2, 0], [0.2, 0.1]]
+supports:
+  - name: left-grip
+    box: [[-0.2, 0], [-0.19, 0.1]]
+    displacement: {x: -1e-5}
+    fixed: [y]
+)");
+  const auto half = run(R"(    box: [[0, 0], [0.2, 0.1]]
+supports:
+  - name: plane
+    symmetry: {x: 0}
+)");
+  // Issue 19 asks for 0.1 %; what remains is the full model's own asymmetry (a ghost's fit is
+  // centred on its nearest source, the lowest index among equals).
+  for (const char* probe : {"u", "v", "force"}) {
+    EXPECT_NEAR(half.at(probe) / full.at(probe), 1.0, 1e-3) << probe;
+    std::printf("half / full - 1 for %s: %.3g\n", probe, half.at(probe) / full.at(probe) - 1);
+  }
+}
+
+} // namespace
