@@ -149,17 +149,26 @@ DimTags build_body(const SceneProblem& p, const int dim) {
 }
 } // namespace
 
-double base_cell_size(const SceneProblem& problem) {
+double base_cell_size(const SceneProblem& problem, const bool gmsh) {
   double h = std::numeric_limits<double>::max();
+  const auto side = [&](const pd::Box& box) {
+    for (int a = 0; a < problem.dim(); ++a)
+      if (box.hi[a] - box.lo[a] > problem.tolerance())
+        h = std::min(h, box.hi[a] - box.lo[a]);
+  };
   for (const pd::BodySpec& b : problem.bodies)
     for (const pd::Box& box : b.region.boxes)
-      for (int a = 0; a < problem.dim(); ++a)
-        if (box.hi[a] - box.lo[a] > problem.tolerance())
-          h = std::min(h, box.hi[a] - box.lo[a]);
+      side(box);
   for (const SolidRegion& r : problem.body_solids)
-    for (const Solid& s : r.parts)
-      if (s.kind != Solid::Kind::box && s.kind != Solid::Kind::half_space)
-        h = std::min(h, s.radius);
+    for (const auto* list : {&r.parts, &r.holes})
+      for (const Solid& s : *list)
+        if (s.kind == Solid::Kind::cylinder || s.kind == Solid::Kind::sphere)
+          h = std::min(h, s.radius);
+  // Gmsh grades the cells between thin supports or loaded layers and the rest: starting from
+  // the largest size would leave distorted cells there.
+  if (gmsh)
+    for (const pd::Box& box : problem.conforming)
+      side(box);
   return h;
 }
 

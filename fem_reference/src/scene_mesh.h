@@ -22,9 +22,10 @@
 namespace pdfem {
 using namespace dealii;
 
-// The level-0 target cell size: the smallest side of any body box (and, with shapes, the
-// smallest radius), so the thinnest part of the body gets a cell across.
-double base_cell_size(const SceneProblem& problem);
+// The level-0 target cell size before the budget enlarges it: the smallest side of any body box
+// and the smallest radius of a cylinder or sphere (body or hole), so the thinnest part of the
+// body gets a cell across; for Gmsh also the smallest side of a support or loaded-cell box.
+double base_cell_size(const SceneProblem& problem, bool gmsh);
 
 template <int dim>
 void box_grid(const SceneProblem& problem, double h, Triangulation<dim>& triangulation);

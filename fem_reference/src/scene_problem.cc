@@ -95,6 +95,11 @@ void check_supported(const pd::Scene& scene) {
   if (m.effects.plasticity)
     throw std::runtime_error("pd-fem --scene: the scene has the effect 'plasticity'; the FE "
                              "reference is linear elastic");
+  if (!m.cracks.empty())
+    throw std::runtime_error("pd-fem --scene: the scene has the pre-crack '" +
+                             m.cracks.front().name +
+                             "'; the FE reference does not represent cracks yet (compare the "
+                             "crack opening with its closed form instead)");
   if (m.lattice.convention != pd::LatticeConvention::cell_centered)
     std::cerr << "pd-fem: warning: node-based lattice: its particles stand λ/2 beyond the boxes' "
                  "faces; the FE body is the boxes themselves\n";

@@ -119,7 +119,7 @@ void SceneReference<dim>::make_grid(const unsigned int level) {
     mesh(base_size, level);
     return;
   }
-  base_size = base_cell_size(problem);
+  base_size = base_cell_size(problem, use_gmsh);
   mesh(base_size, 0);
   for (int attempt = 0; attempt < 6; ++attempt) {
     const auto cells = triangulation.n_active_cells();
