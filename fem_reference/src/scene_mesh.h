@@ -9,9 +9,9 @@
 //    recombined and subdivided) or all hexahedra (3D: tetrahedra subdivided into four hexes).
 //    Level k is the level-0 mesh split k times by Gmsh, which puts the new boundary nodes on
 //    the CAD surfaces: cells halve per level everywhere, also where small features set the
-//    size. Curved surfaces are represented by the mesh's straight-edged cells (MappingQ1): the
-//    geometric error is O(h²) in the position of the surface; Mesh.MeshSizeFromCurvature puts
-//    16 cells around each circle on level 0, 16·2^k on level k.
+//    size. Boundary faces on a sphere or cylinder get it as their manifold, and the solver maps
+//    with MappingQ(2): the geometric error is O(h³); Mesh.MeshSizeFromCurvature puts 16 cells
+//    around each circle on level 0, 16·2^k on level k.
 #pragma once
 
 #include "scene_problem.h"

@@ -32,6 +32,7 @@
 #include <deal.II/dofs/dof_tools.h>
 #include <deal.II/fe/fe_q.h>
 #include <deal.II/fe/fe_values.h>
+#include <deal.II/fe/mapping_q.h>
 #include <deal.II/fe/mapping_q1.h>
 #include <deal.II/lac/dynamic_sparsity_pattern.h>
 #include <deal.II/numerics/fe_field_function.h>
@@ -71,6 +72,11 @@ const char* component_name(const int c) {
 template <int dim>
 SceneReference<dim>::SceneReference(const SceneProblem& p, const SceneOptions& o)
     : problem(p), options(o), fe(FE_Q<dim>(2), dim), use_gmsh(p.curved || o.gmsh) {
+  // Gmsh meshes may have curved boundary faces (scene_mesh.cc): map them with quadratics.
+  if (use_gmsh)
+    mapping = std::make_unique<MappingQ<dim>>(2);
+  else
+    mapping = std::make_unique<MappingQ1<dim>>();
   AssertThrow(p.dim() == dim, ExcMessage("scene of another dimension"));
   component.resize(fe.n_dofs_per_cell());
   for (unsigned int i = 0; i < component.size(); ++i)
@@ -161,7 +167,7 @@ void SceneReference<dim>::setup_system() {
   dof_handler->distribute_dofs(fe);
   const auto n = dof_handler->n_dofs();
   std::vector<Point<dim>> points(n);
-  DoFTools::map_dofs_to_support_points(MappingQ1<dim>(), *dof_handler, points);
+  DoFTools::map_dofs_to_support_points(*mapping, *dof_handler, points);
   dof_component.assign(n, 0);
   std::vector<types::global_dof_index> dofs(fe.n_dofs_per_cell());
   for (const auto& cell : dof_handler->active_cell_iterators()) {
@@ -225,7 +231,7 @@ void SceneReference<dim>::setup_system() {
 template <int dim>
 void SceneReference<dim>::measure_loads() {
   const QGauss<dim> quadrature(fe.degree + 1);
-  FEValues<dim> fv(fe, quadrature, update_quadrature_points | update_JxW_values);
+  FEValues<dim> fv(*mapping, fe, quadrature, update_quadrature_points | update_JxW_values);
   std::vector<double> volume(problem.loads.size(), 0.);
   for (const auto& cell : dof_handler->active_cell_iterators()) {
     fv.reinit(cell);
@@ -281,7 +287,7 @@ template <int dim>
 void SceneReference<dim>::assemble_system() {
   measure_loads();
   const QGauss<dim> quadrature(fe.degree + 1);
-  FEValues<dim> fv(fe, quadrature,
+  FEValues<dim> fv(*mapping, fe, quadrature,
                    update_values | update_gradients | update_quadrature_points | update_JxW_values);
   FullMatrix<double> cell_matrix;
   Vector<double> cell_rhs;
@@ -311,7 +317,7 @@ void SceneReference<dim>::solve() {
 template <int dim>
 double SceneReference<dim>::reaction(const SceneProbe& probe) const {
   const QGauss<dim> quadrature(fe.degree + 1);
-  FEValues<dim> fv(fe, quadrature,
+  FEValues<dim> fv(*mapping, fe, quadrature,
                    update_values | update_gradients | update_quadrature_points | update_JxW_values);
   std::set<types::global_dof_index> wanted;
   for (const auto i : support_dofs.at(probe.support))
@@ -343,7 +349,7 @@ double SceneReference<dim>::reaction(const SceneProbe& probe) const {
 
 template <int dim>
 void SceneReference<dim>::evaluate_probes() {
-  Functions::FEFieldFunction<dim> field(*dof_handler, solution);
+  Functions::FEFieldFunction<dim> field(*dof_handler, solution, *mapping);
   auto& values = levels.back().values;
   for (const SceneProbe& probe : problem.probes) {
     if (probe.quantity == SceneProbe::Quantity::reaction) {

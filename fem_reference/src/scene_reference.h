@@ -7,6 +7,7 @@
 #include <deal.II/dofs/dof_handler.h>
 #include <deal.II/fe/fe_system.h>
 #include <deal.II/fe/fe_values.h>
+#include <deal.II/fe/mapping.h>
 #include <deal.II/grid/tria.h>
 #include <deal.II/lac/affine_constraints.h>
 #include <deal.II/lac/full_matrix.h>
@@ -72,6 +73,7 @@ private:
   Triangulation<dim> triangulation;
   const FESystem<dim> fe;
   const bool use_gmsh;
+  std::unique_ptr<Mapping<dim>> mapping;
   std::unique_ptr<DoFHandler<dim>> dof_handler;
   AffineConstraints<double> constraints;
   std::vector<unsigned int> component; // of each local shape function
