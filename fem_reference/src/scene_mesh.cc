@@ -4,6 +4,7 @@
 #include <deal.II/grid/grid_generator.h>
 #include <deal.II/grid/grid_in.h>
 #include <deal.II/grid/manifold_lib.h>
+#include <fstream>
 #include <gmsh.h>
 #include <limits>
 #include <set>
@@ -203,6 +204,64 @@ void attach_manifolds(const SceneProblem& problem, Triangulation<dim>& triangula
     triangulation.set_manifold(id, SphericalManifold<dim>(centre));
   }
 }
+// Why: a 2D pre-crack is a slit. Each segment, cut to the body, is embedded in the surface
+// (fragment) and gathered in a physical group for Gmsh's Crack plugin, which duplicates its
+// nodes after meshing; its ends on the body's boundary go to the plugin's open boundary, so an
+// edge crack opens at its mouth. Returns the group tags (crack curves, open ends; 0 if none).
+std::pair<int, int> embed_cracks(const SceneProblem& p, DimTags& body) {
+  if (p.cracks.empty())
+    return {0, 0};
+  DimTags lines, out;
+  std::vector<DimTags> map;
+  for (const pd::Crack& c : p.cracks) {
+    const pd::Vec3 &a = c.vertices.at(0), &b = c.vertices.at(1);
+    const int line = occ::addLine(occ::addPoint(a[0], a[1], 0.), occ::addPoint(b[0], b[1], 0.));
+    DimTags copy;
+    occ::copy(body, copy);
+    occ::intersect({{1, line}}, copy, out, map);
+    lines.insert(lines.end(), out.begin(), out.end());
+  }
+  if (lines.empty())
+    return {0, 0};
+  occ::fragment(body, lines, out, map);
+  body.clear();
+  std::vector<int> curves;
+  for (const auto& [d, tag] : out) {
+    if (d == 2)
+      body.emplace_back(d, tag);
+    else
+      curves.push_back(tag);
+  }
+  occ::synchronize();
+  DimTags ends, curve_tags;
+  for (const int c : curves)
+    curve_tags.emplace_back(1, c);
+  gmsh::model::getBoundary(curve_tags, ends, true, false, false);
+  std::vector<int> open;
+  for (const auto& [d, tag] : ends) {
+    std::vector<double> x;
+    gmsh::model::getValue(0, std::abs(tag), {}, x);
+    if (!p.in_domain({x[0], x[1], 0.}, -1e-9 * p.spacing))
+      open.push_back(std::abs(tag));
+  }
+  const int group = gmsh::model::addPhysicalGroup(1, curves);
+  const int open_group = open.empty() ? 0 : gmsh::model::addPhysicalGroup(0, open);
+  return {group, open_group};
+}
+
+void split_cracks(const std::pair<int, int> groups) {
+  if (groups.first == 0)
+    return;
+  gmsh::plugin::setNumber("Crack", "Dimension", 1);
+  gmsh::plugin::setNumber("Crack", "PhysicalGroup", groups.first);
+  gmsh::plugin::setNumber("Crack", "OpenBoundaryPhysicalGroup", groups.second);
+  gmsh::plugin::run("Crack");
+  // Only the cells are written: the crack faces become boundary faces of the mesh.
+  DimTags remove{{1, groups.first}};
+  if (groups.second != 0)
+    remove.emplace_back(0, groups.second);
+  gmsh::model::removePhysicalGroups(remove);
+}
 } // namespace
 
 double base_cell_size(const SceneProblem& problem, const bool gmsh) {
@@ -266,7 +325,8 @@ void gmsh_mesh(const SceneProblem& problem, const double h0, const unsigned int 
   try {
     gmsh::option::setNumber("General.Terminal", 0);
     gmsh::model::add("scene");
-    const DimTags body = build_body(problem, dim);
+    DimTags body = build_body(problem, dim);
+    const auto crack_groups = dim == 2 ? embed_cracks(problem, body) : std::pair<int, int>{0, 0};
     occ::synchronize();
     // Only the cells are written (a physical group of the body's entities): boundary ids all
     // stay 0, supports are found by position.
@@ -294,17 +354,21 @@ void gmsh_mesh(const SceneProblem& problem, const double h0, const unsigned int 
     // cell halves per level, also where small features set the size, as Richardson needs.
     for (unsigned int k = 0; k < level; ++k)
       gmsh::model::mesh::refine();
+    split_cracks(crack_groups);
     std::filesystem::create_directories(msh_file.parent_path());
     gmsh::write(msh_file.string());
   } catch (...) {
     gmsh::finalize();
     throw;
   }
-  gmsh::finalize(); // GridIn::read_msh starts its own Gmsh session
+  gmsh::finalize();
   triangulation.clear();
   GridIn<dim> grid_in;
   grid_in.attach_triangulation(triangulation);
-  grid_in.read_msh(msh_file.string());
+  // The stream reader: reading the file through the Gmsh API merges the nodes the Crack plugin
+  // duplicated, which would close the cracks.
+  std::ifstream in(msh_file);
+  grid_in.read_msh(in);
   if (!triangulation.all_reference_cells_are_hyper_cube())
     throw std::runtime_error("Gmsh left cells that are not quadrilaterals / hexahedra");
   attach_manifolds(problem, triangulation);

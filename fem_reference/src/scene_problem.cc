@@ -95,11 +95,10 @@ void check_supported(const pd::Scene& scene) {
   if (m.effects.plasticity)
     throw std::runtime_error("pd-fem --scene: the scene has the effect 'plasticity'; the FE "
                              "reference is linear elastic");
-  if (!m.cracks.empty())
+  if (!m.cracks.empty() && m.dimension.dim == 3)
     throw std::runtime_error("pd-fem --scene: the scene has the pre-crack '" +
                              m.cracks.front().name +
-                             "'; the FE reference does not represent cracks yet (compare the "
-                             "crack opening with its closed form instead)");
+                             "'; the FE reference represents 2D cracks (segments) only");
   if (m.lattice.convention != pd::LatticeConvention::cell_centered)
     std::cerr << "pd-fem: warning: node-based lattice: its particles stand λ/2 beyond the boxes' "
                  "faces; the FE body is the boxes themselves\n";
@@ -282,6 +281,10 @@ SceneProblem translate_scene(const pd::Scene& scene) {
       p.removed_solids.push_back(solids_of(s.region));
     }
   }
+
+  // A crack is a slit in the mesh: only the Gmsh route makes one.
+  p.cracks = spec.cracks;
+  p.curved = p.curved || !p.cracks.empty();
 
   const pd::ParticleSet particles = scene_particles(scene);
   for (const pd::LoadSpec& load : spec.loads) {

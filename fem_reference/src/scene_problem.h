@@ -69,6 +69,7 @@ struct SceneProblem {
   std::vector<SolidRegion> body_solids;
   std::vector<SolidRegion> removed_solids;
   std::vector<pd::Box> conforming;
+  std::vector<pd::Crack> cracks; // 2D segments: slits, both faces traction-free (Gmsh only)
   bool curved = false;
   pd::Box bounding_box;                      // of the domain
   std::array<std::vector<double>, 3> planes; // per axis: every box face of the scene (sorted)
