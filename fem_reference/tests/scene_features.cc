@@ -1,6 +1,6 @@
-// pd-fem-scene-features: the FE side of scene features the scene reader cannot express yet
-// (reaction and stress probes, symmetry supports, point loads), set in C++ on a read scene and
-// checked against closed forms.
+// pd-fem-scene-features: the FE side of reaction and stress probes, symmetry supports, point
+// loads and displacement supports, set in C++ as variants of one read scene (written before the
+// scene reader had keys for them) and checked against closed forms.
 //
 //   pd-fem-scene-features BAR_2D_YAML WORK_DIR
 //
