@@ -1,7 +1,7 @@
 #include "elastic_reference.h"
 
-#include <Epetra_MultiVector.h>
-#include <Teuchos_ParameterList.hpp>
+#include "elastic_common.h"
+
 #include <chrono>
 #include <cmath>
 #include <deal.II/base/function.h>
@@ -12,13 +12,9 @@
 #include <deal.II/dofs/dof_tools.h>
 #include <deal.II/fe/fe_q.h>
 #include <deal.II/fe/fe_values.h>
-#include <deal.II/fe/mapping_q1.h>
 #include <deal.II/grid/grid_generator.h>
 #include <deal.II/lac/dynamic_sparsity_pattern.h>
 #include <deal.II/lac/full_matrix.h>
-#include <deal.II/lac/solver_cg.h>
-#include <deal.II/lac/solver_control.h>
-#include <deal.II/lac/trilinos_precondition.h>
 #include <deal.II/numerics/data_out.h>
 #include <deal.II/numerics/fe_field_function.h>
 #include <deal.II/numerics/vector_tools.h>
@@ -159,8 +155,7 @@ void ElasticReference<dim>::setup_system() {
 // WorkStream; the copy into the global matrix runs serially.
 template <int dim>
 void ElasticReference<dim>::assemble_system() {
-  const double lambda = prm.lame_lambda();
-  const double mu = prm.lame_mu();
+  const LameConstants lame{prm.lame_lambda(), prm.lame_mu()};
   Tensor<1, dim> traction;
   traction[vertical(dim)] = -prm.traction();
   const types::boundary_id loaded_face = 2 * dim - 1; // z+ (2D: y+)
@@ -198,30 +193,9 @@ void ElasticReference<dim>::assemble_system() {
     copy.cell_matrix.reinit(dofs_per_cell, dofs_per_cell);
     copy.cell_rhs.reinit(dofs_per_cell);
     copy.local_dof_indices.resize(dofs_per_cell);
-    scratch.grad.resize(dofs_per_cell);
 
     scratch.fe_values.reinit(cell);
-    const auto& fv = scratch.fe_values;
-    for (const unsigned int q : fv.quadrature_point_indices()) {
-      for (unsigned int i = 0; i < dofs_per_cell; ++i)
-        scratch.grad[i] = fv.shape_grad_component(i, q, component[i]);
-      const double JxW = fv.JxW(q);
-      for (unsigned int i = 0; i < dofs_per_cell; ++i) {
-        const unsigned int ci = component[i];
-        const Tensor<1, dim>& gi = scratch.grad[i];
-        for (unsigned int j = 0; j <= i; ++j) {
-          const unsigned int cj = component[j];
-          const Tensor<1, dim>& gj = scratch.grad[j];
-          double a = lambda * gi[ci] * gj[cj] + mu * gi[cj] * gj[ci];
-          if (ci == cj)
-            a += mu * (gi * gj);
-          copy.cell_matrix(i, j) += a * JxW;
-        }
-      }
-    }
-    for (unsigned int i = 0; i < dofs_per_cell; ++i)
-      for (unsigned int j = i + 1; j < dofs_per_cell; ++j)
-        copy.cell_matrix(i, j) = copy.cell_matrix(j, i);
+    add_elastic_cell_matrix(scratch.fe_values, component, lame, scratch.grad, copy.cell_matrix);
 
     for (const auto& face : cell->face_iterators())
       if (face->at_boundary() && face->boundary_id() == loaded_face) {
@@ -246,93 +220,20 @@ void ElasticReference<dim>::assemble_system() {
   system_rhs.compress(VectorOperation::add);
 }
 
-// Why: the stiffness matrix is symmetric positive definite once the
-// clamped dofs are eliminated, so CG is the method of choice.  Its
-// iteration count grows like sqrt(cond(A)) ~ 1/h for SSOR, so for the
-// larger levels we precondition with smoothed-aggregation AMG (Trilinos
-// ML).  For elasticity, aggregation-based AMG needs the near null space of
-// the operator, i.e. the rigid-body modes, in 3D the six
-//
-//   translations  (1,0,0), (0,1,0), (0,0,1)
-//   rotations     (0,-z,y), (z,0,-x), (-y,x,0)   (about the centroid),
-//
-// in 2D the three (1,0), (0,1), (-y,x), evaluated at the support point of
-// every dof.  deal.II 9.4 has no
-// DoFTools::extract_rigid_body_modes and AdditionalData::constant_modes
-// only takes 0/1 masks, so we hand the real-valued modes to ML through
-// the Teuchos parameter list ("null space: type = pre-computed").
+// Why: CG with AMG and the rigid-body modes about the centroid (elastic_common.h).
 template <int dim>
 void ElasticReference<dim>::solve() {
-  auto t0 = std::chrono::steady_clock::now();
   auto& level = summary.levels.back();
-  const auto n = dof_handler.n_dofs();
-  TrilinosWrappers::MPI::Vector x(complete_index_set(n), MPI_COMM_WORLD);
-
-  SolverControl solver_control(prm.max_iterations, prm.relative_tolerance * system_rhs.l2_norm());
-  SolverCG<TrilinosWrappers::MPI::Vector> cg(solver_control);
-
-  if (prm.preconditioner == "AMG") {
-    std::vector<Point<dim>> support_points(n);
-    DoFTools::map_dofs_to_support_points(MappingQ1<dim>(), dof_handler, support_points);
-    std::vector<unsigned int> dof_component(n, 0);
-    {
-      std::vector<types::global_dof_index> dofs(fe.n_dofs_per_cell());
-      for (const auto& cell : dof_handler.active_cell_iterators()) {
-        cell->get_dof_indices(dofs);
-        for (unsigned int i = 0; i < dofs.size(); ++i)
-          dof_component[dofs[i]] = fe.system_to_component_index(i).first;
-      }
-    }
-    Point<dim> centre;
-    const std::vector<double> extent = prm.extent();
-    for (unsigned int d = 0; d < dim; ++d)
-      centre[d] = extent[d] / 2;
-
-    TrilinosWrappers::PreconditionAMG::AdditionalData data;
-    data.elliptic = true;
-    data.higher_order_elements = (fe.degree > 1);
-    data.smoother_sweeps = 2;
-    data.aggregation_threshold = 1e-4;
-    Teuchos::ParameterList parameter_list;
-    std::unique_ptr<Epetra_MultiVector> unused_modes;
-    data.set_parameters(parameter_list, unused_modes, system_matrix);
-
-    const int n_modes = dim == 2 ? 3 : 6;
-    Epetra_MultiVector modes(system_matrix.trilinos_matrix().DomainMap(), n_modes);
-    for (types::global_dof_index i = 0; i < n; ++i) {
-      const int li = static_cast<int>(i); // serial: local = global
-      const unsigned int c = dof_component[i];
-      const Tensor<1, dim> r = support_points[i] - centre;
-      modes[c][li] = 1.;
-      if constexpr (dim == 2) {
-        const double rot[2] = {-r[1], r[0]};
-        modes[2][li] = rot[c];
-      } else {
-        // rotation about x: (0,-z,y); about y: (z,0,-x); about z: (-y,x,0)
-        const double rot[3][3] = {{0., -r[2], r[1]}, {r[2], 0., -r[0]}, {-r[1], r[0], 0.}};
-        for (unsigned int k = 0; k < 3; ++k)
-          modes[3 + k][li] = rot[k][c];
-      }
-    }
-    parameter_list.set("PDE equations", dim);
-    parameter_list.set("null space: type", "pre-computed");
-    parameter_list.set("null space: dimension", n_modes);
-    parameter_list.set("null space: vectors", modes.Values());
-
-    TrilinosWrappers::PreconditionAMG amg;
-    amg.initialize(system_matrix, parameter_list);
-    level.preconditioner_time = seconds_since(t0);
-    cg.solve(system_matrix, x, system_rhs, amg);
-  } else {
-    TrilinosWrappers::PreconditionSSOR ssor;
-    ssor.initialize(system_matrix, TrilinosWrappers::PreconditionSSOR::AdditionalData(1.2));
-    level.preconditioner_time = seconds_since(t0);
-    cg.solve(system_matrix, x, system_rhs, ssor);
-  }
-  constraints.distribute(x);
-  solution = Vector<double>(x);
-  level.iterations = solver_control.last_step();
-  level.solve_time = seconds_since(t0);
+  Point<dim> centre;
+  const std::vector<double> extent = prm.extent();
+  for (unsigned int d = 0; d < dim; ++d)
+    centre[d] = extent[d] / 2;
+  const CgStatistics stats =
+      solve_elasticity(dof_handler, system_matrix, system_rhs, constraints, centre,
+                       prm.preconditioner, prm.relative_tolerance, prm.max_iterations, solution);
+  level.iterations = stats.iterations;
+  level.preconditioner_time = stats.preconditioner_time;
+  level.solve_time = stats.solve_time;
 }
 
 // Why: the verification suite compares point deflections.  We evaluate

@@ -1,5 +1,7 @@
 #include "parameters.h"
 
+#include "elastic_common.h"
+
 #include <algorithm>
 #include <cmath>
 #include <deal.II/base/utilities.h>
@@ -285,15 +287,11 @@ double Parameters::line_load() const {
 }
 
 double Parameters::lame_lambda() const {
-  const double E = youngs_modulus, nu = poisson_ratio;
-  const double lambda = E * nu / ((1. + nu) * (1. - 2. * nu));
-  const double mu = lame_mu();
-  // sigma_zz = 0 eliminates eps_zz = -lambda/(lambda + 2 mu) (eps_xx + eps_yy).
-  return dimension == 2 && plane == "stress" ? 2. * lambda * mu / (lambda + 2. * mu) : lambda;
+  return lame_constants(youngs_modulus, poisson_ratio, dimension == 2 && plane == "stress").lambda;
 }
 
 double Parameters::lame_mu() const {
-  return youngs_modulus / (2. * (1. + poisson_ratio));
+  return lame_constants(youngs_modulus, poisson_ratio, false).mu;
 }
 
 double Parameters::bending_modulus() const {

@@ -71,6 +71,7 @@
 
 #include "elastic_reference.h"
 #include "kirchhoff_plate.h"
+#include "scene_reference.h"
 
 #include <boost/property_tree/json_parser.hpp>
 #include <boost/property_tree/ptree.hpp>
@@ -86,6 +87,7 @@
 namespace {
 const char* const usage_text =
     "usage: pd-fem PRMFILE [-o DIR] [--levels N] [--coarse] [--check REFERENCE.json]\n"
+    "       pd-fem --scene SCENE.yaml [-o DIR] [--levels N] [--coarse]\n"
     "       pd-fem --print-parameters | --kirchhoff-selftest | --help\n"
     "\n"
     "Solves linear elasticity (3D, or 2D plane stress / plane strain) with deal.II\n"
@@ -93,6 +95,10 @@ const char* const usage_text =
     "and writes summary.json, deflection lines (CSV) and solution.vtu.\n"
     "\n"
     "  PRMFILE            deal.II parameter file (see fem_reference/prm/)\n"
+    "  --scene FILE       instead: the linear-elastic problem of a libpd scene\n"
+    "                     (bodies, supports, loads, probes as PD reads them);\n"
+    "                     writes DIR/fe.json (default fem_reference/out/STEM)\n"
+    "  --gmsh             (--scene) mesh with Gmsh even if every shape is a box\n"
     "  -o DIR             output directory (default fem_reference/out/NAME,\n"
     "                     relative to the current directory)\n"
     "  --levels N         number of refinement levels (overrides the file)\n"
@@ -107,9 +113,10 @@ const char* const usage_text =
     "  --help             this text\n";
 
 struct Arguments {
-  std::string prm_file, output_dir, check_file;
+  std::string prm_file, output_dir, check_file, scene_file;
   int levels = -1;
   bool coarse = false;
+  bool gmsh = false;
 };
 
 // Compare a run with a stored reference summary.json. Returns true if all
@@ -174,6 +181,27 @@ bool check_against_reference(const pdfem::RunSummary& run, const std::string& re
   }
   return ok;
 }
+// pd-fem --scene: the FE reference of a libpd scene (scene_reference.h).
+int run_scene(const Arguments& args) {
+  if (!args.prm_file.empty())
+    throw std::runtime_error("--scene and a parameter file exclude each other\n" +
+                             std::string(usage_text));
+  if (!args.check_file.empty())
+    throw std::runtime_error("--check applies to parameter files only");
+  const pdfem::SceneProblem problem = pdfem::read_scene_problem(args.scene_file);
+  pdfem::SceneOptions options;
+  options.levels = args.levels > 0 ? static_cast<unsigned int>(args.levels) : 0;
+  options.coarse = args.coarse;
+  options.gmsh = args.gmsh;
+  options.output_directory = args.output_dir.empty()
+                                 ? std::filesystem::path("fem_reference") / "out" /
+                                       std::filesystem::path(args.scene_file).stem()
+                                 : std::filesystem::path(args.output_dir);
+  pdfem::solve_scene(problem, options);
+  std::printf("%s: output in %s\n", args.scene_file.c_str(),
+              (options.output_directory / "fe.json").string().c_str());
+  return 0;
+}
 } // namespace
 
 int main(int argc, char** argv) {
@@ -219,6 +247,10 @@ int main(int argc, char** argv) {
         args.coarse = true;
       else if (a == "--check")
         args.check_file = need_value(i);
+      else if (a == "--scene")
+        args.scene_file = need_value(i);
+      else if (a == "--gmsh")
+        args.gmsh = true;
       else if (!a.empty() && a[0] == '-')
         throw std::runtime_error("unknown option '" + a + "'\n" + usage_text);
       else if (args.prm_file.empty())
@@ -226,6 +258,8 @@ int main(int argc, char** argv) {
       else
         throw std::runtime_error("more than one parameter file given\n" + std::string(usage_text));
     }
+    if (!args.scene_file.empty())
+      return run_scene(args);
     if (args.prm_file.empty())
       throw std::runtime_error(std::string("no parameter file given\n") + usage_text);
 
@@ -269,6 +303,10 @@ int main(int argc, char** argv) {
       }
       std::printf("check against %s passed\n", args.check_file.c_str());
     }
+  } catch (const pd::SceneError& e) {
+    // Already "FILE:LINE:COLUMN: error: WHAT" with a hint.
+    std::cerr << e.what() << std::endl;
+    return 1;
   } catch (const dealii::ExceptionBase& e) {
     // deal.II exceptions (e.g. a bad .prm entry): print the message
     // ("Line <7> of file <x.prm>: ..."), not the source location and

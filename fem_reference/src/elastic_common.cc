@@ -1,0 +1,158 @@
+#include "elastic_common.h"
+
+#include <Epetra_MultiVector.h>
+#include <Teuchos_ParameterList.hpp>
+#include <chrono>
+#include <deal.II/dofs/dof_tools.h>
+#include <deal.II/fe/mapping_q1.h>
+#include <deal.II/lac/solver_cg.h>
+#include <deal.II/lac/solver_control.h>
+#include <deal.II/lac/trilinos_precondition.h>
+#include <memory>
+
+namespace pdfem {
+namespace {
+double seconds_since(const std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// Why: aggregation-based AMG for elasticity needs the near null space of the operator, the
+// rigid-body modes, in 3D the six
+//   translations  (1,0,0), (0,1,0), (0,0,1)
+//   rotations     (0,-z,y), (z,0,-x), (-y,x,0)   (about `centre`),
+// in 2D the three (1,0), (0,1), (-y,x), evaluated at the support point of every dof. deal.II 9.4
+// has no DoFTools::extract_rigid_body_modes and AdditionalData::constant_modes only takes 0/1
+// masks, so the real-valued modes go to ML through the Teuchos parameter list.
+template <int dim>
+void initialize_amg(const DoFHandler<dim>& dof_handler,
+                    const TrilinosWrappers::SparseMatrix& system_matrix, const Point<dim>& centre,
+                    TrilinosWrappers::PreconditionAMG& amg) {
+  const auto n = dof_handler.n_dofs();
+  const auto& fe = dof_handler.get_fe();
+  std::vector<Point<dim>> support_points(n);
+  DoFTools::map_dofs_to_support_points(MappingQ1<dim>(), dof_handler, support_points);
+  std::vector<unsigned int> dof_component(n, 0);
+  std::vector<types::global_dof_index> dofs(fe.n_dofs_per_cell());
+  for (const auto& cell : dof_handler.active_cell_iterators()) {
+    cell->get_dof_indices(dofs);
+    for (unsigned int i = 0; i < dofs.size(); ++i)
+      dof_component[dofs[i]] = fe.system_to_component_index(i).first;
+  }
+
+  TrilinosWrappers::PreconditionAMG::AdditionalData data;
+  data.elliptic = true;
+  data.higher_order_elements = (fe.degree > 1);
+  data.smoother_sweeps = 2;
+  data.aggregation_threshold = 1e-4;
+  Teuchos::ParameterList parameter_list;
+  std::unique_ptr<Epetra_MultiVector> unused_modes;
+  data.set_parameters(parameter_list, unused_modes, system_matrix);
+
+  const int n_modes = dim == 2 ? 3 : 6;
+  Epetra_MultiVector modes(system_matrix.trilinos_matrix().DomainMap(), n_modes);
+  for (types::global_dof_index i = 0; i < n; ++i) {
+    const int li = static_cast<int>(i); // serial: local = global
+    const unsigned int c = dof_component[i];
+    const Tensor<1, dim> r = support_points[i] - centre;
+    modes[c][li] = 1.;
+    if constexpr (dim == 2) {
+      const double rot[2] = {-r[1], r[0]};
+      modes[2][li] = rot[c];
+    } else {
+      // rotation about x: (0,-z,y); about y: (z,0,-x); about z: (-y,x,0)
+      const double rot[3][3] = {{0., -r[2], r[1]}, {r[2], 0., -r[0]}, {-r[1], r[0], 0.}};
+      for (unsigned int k = 0; k < 3; ++k)
+        modes[3 + k][li] = rot[k][c];
+    }
+  }
+  parameter_list.set("PDE equations", dim);
+  parameter_list.set("null space: type", "pre-computed");
+  parameter_list.set("null space: dimension", n_modes);
+  parameter_list.set("null space: vectors", modes.Values());
+  amg.initialize(system_matrix, parameter_list);
+}
+} // namespace
+
+LameConstants lame_constants(const double E, const double nu, const bool plane_stress) {
+  const double lambda = E * nu / ((1. + nu) * (1. - 2. * nu));
+  const double mu = E / (2. * (1. + nu));
+  return {plane_stress ? 2. * lambda * mu / (lambda + 2. * mu) : lambda, mu};
+}
+
+template <int dim>
+void add_elastic_cell_matrix(const FEValues<dim>& fv, const std::vector<unsigned int>& component,
+                             const LameConstants& lame, std::vector<Tensor<1, dim>>& grad,
+                             FullMatrix<double>& cell_matrix) {
+  const unsigned int n = fv.get_fe().n_dofs_per_cell();
+  grad.resize(n);
+  for (const unsigned int q : fv.quadrature_point_indices()) {
+    for (unsigned int i = 0; i < n; ++i)
+      grad[i] = fv.shape_grad_component(i, q, component[i]);
+    const double JxW = fv.JxW(q);
+    for (unsigned int i = 0; i < n; ++i) {
+      const unsigned int ci = component[i];
+      const Tensor<1, dim>& gi = grad[i];
+      for (unsigned int j = 0; j <= i; ++j) {
+        const unsigned int cj = component[j];
+        const Tensor<1, dim>& gj = grad[j];
+        double a = lame.lambda * gi[ci] * gj[cj] + lame.mu * gi[cj] * gj[ci];
+        if (ci == cj)
+          a += lame.mu * (gi * gj);
+        cell_matrix(i, j) += a * JxW;
+      }
+    }
+  }
+  for (unsigned int i = 0; i < n; ++i)
+    for (unsigned int j = i + 1; j < n; ++j)
+      cell_matrix(i, j) = cell_matrix(j, i);
+}
+
+// Why: the stiffness matrix is symmetric positive definite once the supported dofs are
+// eliminated, so CG is the method of choice. Its iteration count grows like sqrt(cond(A)) ~ 1/h
+// for SSOR, so the larger levels are preconditioned with smoothed-aggregation AMG (Trilinos ML).
+template <int dim>
+CgStatistics solve_elasticity(const DoFHandler<dim>& dof_handler,
+                              const TrilinosWrappers::SparseMatrix& system_matrix,
+                              const TrilinosWrappers::MPI::Vector& system_rhs,
+                              const AffineConstraints<double>& constraints,
+                              const Point<dim>& centre, const std::string& preconditioner,
+                              const double relative_tolerance, const unsigned int max_iterations,
+                              Vector<double>& solution) {
+  const auto t0 = std::chrono::steady_clock::now();
+  CgStatistics stats;
+  TrilinosWrappers::MPI::Vector x(complete_index_set(dof_handler.n_dofs()), MPI_COMM_WORLD);
+  SolverControl solver_control(max_iterations, relative_tolerance * system_rhs.l2_norm());
+  SolverCG<TrilinosWrappers::MPI::Vector> cg(solver_control);
+  if (preconditioner == "AMG") {
+    TrilinosWrappers::PreconditionAMG amg;
+    initialize_amg(dof_handler, system_matrix, centre, amg);
+    stats.preconditioner_time = seconds_since(t0);
+    cg.solve(system_matrix, x, system_rhs, amg);
+  } else {
+    TrilinosWrappers::PreconditionSSOR ssor;
+    ssor.initialize(system_matrix, TrilinosWrappers::PreconditionSSOR::AdditionalData(1.2));
+    stats.preconditioner_time = seconds_since(t0);
+    cg.solve(system_matrix, x, system_rhs, ssor);
+  }
+  constraints.distribute(x);
+  solution = Vector<double>(x);
+  stats.iterations = solver_control.last_step();
+  stats.solve_time = seconds_since(t0);
+  return stats;
+}
+
+template void add_elastic_cell_matrix<2>(const FEValues<2>&, const std::vector<unsigned int>&,
+                                         const LameConstants&, std::vector<Tensor<1, 2>>&,
+                                         FullMatrix<double>&);
+template void add_elastic_cell_matrix<3>(const FEValues<3>&, const std::vector<unsigned int>&,
+                                         const LameConstants&, std::vector<Tensor<1, 3>>&,
+                                         FullMatrix<double>&);
+template CgStatistics
+solve_elasticity<2>(const DoFHandler<2>&, const TrilinosWrappers::SparseMatrix&,
+                    const TrilinosWrappers::MPI::Vector&, const AffineConstraints<double>&,
+                    const Point<2>&, const std::string&, double, unsigned int, Vector<double>&);
+template CgStatistics
+solve_elasticity<3>(const DoFHandler<3>&, const TrilinosWrappers::SparseMatrix&,
+                    const TrilinosWrappers::MPI::Vector&, const AffineConstraints<double>&,
+                    const Point<3>&, const std::string&, double, unsigned int, Vector<double>&);
+} // namespace pdfem

@@ -1,0 +1,303 @@
+#include "scene_problem.h"
+
+#include "libpd/app/probes.hpp"
+#include "libpd/discretisation/lattice.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <iostream>
+#include <stdexcept>
+
+namespace pdfem {
+namespace {
+
+void add_box_planes(const pd::Box& box, const int dim, std::array<std::vector<double>, 3>& planes) {
+  for (int a = 0; a < dim; ++a) {
+    planes[a].push_back(box.lo[a]);
+    planes[a].push_back(box.hi[a]);
+  }
+}
+
+// Why: PD spreads a load over the particles it selects in proportion to their volumes, i.e. a
+// uniform force density over the union of their cells. The mesh needs faces on the boundary of
+// that union: the faces of the bounding box of the load's cells are added (exact for the usual
+// box-shaped loaded layers).
+pd::Box cell_bounds(const LatticeCells& cells) {
+  pd::Box box;
+  std::array<long long, 3> lo{}, hi{};
+  bool first = true;
+  for (const auto& c : cells.cells) {
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = first ? c[a] : std::min(lo[a], c[a]);
+      hi[a] = first ? c[a] : std::max(hi[a], c[a]);
+    }
+    first = false;
+  }
+  for (int a = 0; a < cells.dim; ++a) {
+    box.lo[a] = cells.origin[a] + static_cast<double>(lo[a]) * cells.spacing;
+    box.hi[a] = cells.origin[a] + static_cast<double>(hi[a] + 1) * cells.spacing;
+  }
+  return box;
+}
+
+SolidRegion solids_of(const pd::Region& region) {
+  SolidRegion out;
+  for (const pd::Box& box : region.boxes) {
+    Solid s;
+    s.box = box;
+    out.parts.push_back(s);
+  }
+  out.parts.insert(out.parts.end(), region.shapes.begin(), region.shapes.end());
+  out.holes = region.minus;
+  return out;
+}
+
+// Why: box shapes and box holes are grid planes too; any other shape needs Gmsh.
+bool add_region_planes(const pd::Region& region, const int dim,
+                       std::array<std::vector<double>, 3>& planes) {
+  bool curved = false;
+  for (const pd::Box& box : region.boxes)
+    add_box_planes(box, dim, planes);
+  for (const auto* list : {&region.shapes, &region.minus})
+    for (const pd::Shape& s : *list) {
+      if (s.kind == pd::Shape::Kind::box)
+        add_box_planes(s.box, dim, planes);
+      else
+        curved = true;
+    }
+  return curved;
+}
+
+// Sorted, without duplicates (closer than `tol`), clipped to [lo, hi].
+std::vector<double> cleaned(std::vector<double> v, const double lo, const double hi,
+                            const double tol) {
+  for (double& x : v)
+    x = std::clamp(x, lo, hi);
+  v.push_back(lo);
+  v.push_back(hi);
+  std::sort(v.begin(), v.end());
+  std::vector<double> out;
+  for (const double x : v)
+    if (out.empty() || x - out.back() > tol)
+      out.push_back(x);
+  return out;
+}
+
+void check_supported(const pd::Scene& scene) {
+  const pd::ModelSpec& m = scene.model;
+  if (m.dimension.dim != 2 && m.dimension.dim != 3)
+    throw std::runtime_error("pd-fem --scene: dimension " + std::to_string(m.dimension.dim) +
+                             " is not supported (2 or 3)");
+  if (m.effects.damage)
+    throw std::runtime_error("pd-fem --scene: the scene has the effect 'damage'; the FE "
+                             "reference is linear elastic (remove damage to verify the elastic "
+                             "response)");
+  if (m.effects.plasticity)
+    throw std::runtime_error("pd-fem --scene: the scene has the effect 'plasticity'; the FE "
+                             "reference is linear elastic");
+  if (!m.cracks.empty() && m.dimension.dim == 3)
+    throw std::runtime_error("pd-fem --scene: the scene has the pre-crack '" +
+                             m.cracks.front().name +
+                             "'; the FE reference represents 2D cracks (segments) only");
+  if (m.lattice.convention != pd::LatticeConvention::cell_centered)
+    std::cerr << "pd-fem: warning: node-based lattice: its particles stand λ/2 beyond the boxes' "
+                 "faces; the FE body is the boxes themselves\n";
+  if (m.lattice.position_jitter > 0 || m.lattice.volume_variation > 0)
+    std::cerr << "pd-fem: warning: the lattice's jitter / volume variation is ignored by the FE "
+                 "reference\n";
+}
+
+pd::ParticleSet scene_particles(const pd::Scene& scene) {
+  if (scene.particles)
+    return scene.particles->particles;
+  return pd::generate_lattice(scene.model.dimension, scene.model.lattice, scene.model.bodies);
+}
+
+LatticeCells cells_of(const pd::ModelSpec& spec, const pd::ParticleSet& particles,
+                      const std::vector<std::uint32_t>& members) {
+  LatticeCells cells;
+  cells.origin = spec.lattice.origin;
+  cells.spacing = spec.lattice.spacing;
+  cells.dim = spec.dimension.dim;
+  for (const std::uint32_t i : members)
+    cells.cells.insert(cells.cell_of(particles.position[i]));
+  return cells;
+}
+
+SceneLoad translate_load(const pd::ModelSpec& spec, const pd::ParticleSet& particles,
+                         const pd::LoadSpec& load) {
+  SceneLoad out;
+  out.name = load.name;
+  const auto members = pd::load_particles(spec, particles, load, particles.size());
+  if (members.empty())
+    throw std::runtime_error("load '" + load.name + "' acts on no particle");
+  out.cells = cells_of(spec, particles, members);
+  using Kind = pd::BoxRegionLoad::Kind;
+  switch (load.load.kind) {
+  case Kind::body:
+    out.density = true;
+    out.value = load.load.value;
+    break;
+  case Kind::total:
+  case Kind::point: // the particles nearest the point share it in proportion to volume
+    out.value = load.load.value;
+    break;
+  case Kind::per_area:
+  case Kind::per_length:
+    for (int c = 0; c < 3; ++c)
+      out.value[c] = load.load.value[c] * load.load.measure;
+    break;
+  }
+  return out;
+}
+
+std::size_t support_index(const pd::Scene& scene, const pd::ProbeSpec& probe) {
+  const auto& supports = scene.model.supports;
+  for (std::size_t s = 0; s < supports.size(); ++s)
+    if (supports[s].name == probe.support)
+      return s;
+  throw std::runtime_error("probe '" + probe.name + "' reads the reaction of support '" +
+                           probe.support + "', which the scene does not have");
+}
+
+// Why: PD's displacement and stress probes read particles, the ones libpd resolves for them;
+// the FE solution is evaluated at those particles' positions. resolve_probes reads only the
+// particles and the model's dimension and lattice, so a model without bonds is enough
+// (building the bond families of a fine lattice would cost more than the FE solve).
+std::vector<SceneProbe> translate_probes(const pd::Scene& scene, const pd::ParticleSet& particles,
+                                         const SceneProblem& problem) {
+  using Q = pd::ProbeSpec::Quantity;
+  std::vector<pd::ProbeSpec> located;
+  for (const pd::ProbeSpec& spec : scene.probes) {
+    if (spec.quantity == Q::damage)
+      throw std::runtime_error("probe '" + spec.name +
+                               "' reads damage; the FE reference is linear elastic");
+    if (spec.quantity != Q::reaction)
+      located.push_back(spec);
+  }
+  pd::Model model;
+  model.spec = scene.model;
+  model.particles = particles;
+  const auto resolved = pd::resolve_probes(located, model);
+  std::vector<SceneProbe> out;
+  std::size_t next = 0;
+  for (const pd::ProbeSpec& spec : scene.probes) {
+    SceneProbe p;
+    p.name = spec.name;
+    p.component = spec.component;
+    if (spec.quantity == Q::reaction) {
+      p.quantity = SceneProbe::Quantity::reaction;
+      p.support = support_index(scene, spec);
+      out.push_back(std::move(p));
+      continue;
+    }
+    p.quantity = spec.quantity == Q::stress ? SceneProbe::Quantity::stress
+                                            : SceneProbe::Quantity::displacement;
+    for (const std::uint32_t i : resolved[next++].particles) {
+      const pd::Vec3& x = particles.position[i];
+      if (!problem.in_domain(x, problem.tolerance()))
+        throw std::runtime_error("probe '" + p.name +
+                                 "' reads a particle outside the continuum body (behind a "
+                                 "clamp plane or in a hole); the FE solution has no value there");
+      p.points.push_back(x);
+    }
+    out.push_back(std::move(p));
+  }
+  return out;
+}
+} // namespace
+
+std::array<long long, 3> LatticeCells::cell_of(const pd::Vec3& p) const {
+  std::array<long long, 3> c{0, 0, 0};
+  for (int a = 0; a < dim; ++a)
+    c[a] = static_cast<long long>(std::floor((p[a] - origin[a]) / spacing));
+  return c;
+}
+
+std::string SceneProblem::model_name() const {
+  if (dim() == 3)
+    return "3D";
+  return plane_stress() ? "2D plane stress" : "2D plane strain";
+}
+
+bool SceneProblem::in_domain(const pd::Vec3& p, const double tol) const {
+  const auto holds = [&](const pd::BodySpec& b) { return b.region.contains(p, dim(), tol); };
+  const auto takes = [&](const pd::Region& r) { return r.contains(p, dim(), -tol); };
+  return std::any_of(bodies.begin(), bodies.end(), holds) &&
+         std::none_of(removed.begin(), removed.end(), takes);
+}
+
+int SceneProblem::body_at(const pd::Vec3& p) const {
+  for (std::size_t b = 0; b < bodies.size(); ++b)
+    if (bodies[b].region.contains(p, dim(), 0.))
+      return static_cast<int>(b);
+  // A straight-edged cell along a curved hole reaches a little into the hole: its body is the
+  // one whose region holds the point with the holes left out.
+  for (std::size_t b = 0; b < bodies.size(); ++b) {
+    pd::Region filled = bodies[b].region;
+    filled.minus.clear();
+    if (filled.contains(p, dim(), tolerance()))
+      return static_cast<int>(b);
+  }
+  return -1;
+}
+
+SceneProblem read_scene_problem(const std::string& path) {
+  return translate_scene(pd::load_scene(path));
+}
+
+SceneProblem translate_scene(const pd::Scene& scene) {
+  check_supported(scene);
+  const pd::ModelSpec& spec = scene.model;
+  SceneProblem p;
+  p.path = scene.path;
+  p.title = scene.title;
+  p.dimension = spec.dimension;
+  p.spacing = spec.lattice.spacing;
+  p.materials = spec.materials;
+  p.bodies = spec.bodies;
+  p.supports = spec.supports;
+  const int dim = spec.dimension.dim;
+
+  std::array<std::vector<double>, 3> planes;
+  bool first = true;
+  for (const pd::BodySpec& b : spec.bodies) {
+    p.body_solids.push_back(solids_of(b.region));
+    p.curved = add_region_planes(b.region, dim, planes) || p.curved;
+    for (const pd::Box& box : b.region.cover(dim)) {
+      for (int a = 0; a < 3; ++a) {
+        p.bounding_box.lo[a] = first ? box.lo[a] : std::min(p.bounding_box.lo[a], box.lo[a]);
+        p.bounding_box.hi[a] = first ? box.hi[a] : std::max(p.bounding_box.hi[a], box.hi[a]);
+      }
+      first = false;
+    }
+  }
+  for (const pd::SupportSpec& s : spec.supports) {
+    p.curved = add_region_planes(s.region, dim, planes) || p.curved;
+    if (s.region.only_boxes())
+      p.conforming.insert(p.conforming.end(), s.region.boxes.begin(), s.region.boxes.end());
+    if (s.mirrors()) {
+      p.removed.push_back(s.region);
+      p.removed_solids.push_back(solids_of(s.region));
+    }
+  }
+
+  // A crack is a slit in the mesh: only the Gmsh route makes one.
+  p.cracks = spec.cracks;
+  p.curved = p.curved || !p.cracks.empty();
+
+  const pd::ParticleSet particles = scene_particles(scene);
+  for (const pd::LoadSpec& load : spec.loads) {
+    p.loads.push_back(translate_load(spec, particles, load));
+    p.conforming.push_back(cell_bounds(p.loads.back().cells));
+    add_box_planes(p.conforming.back(), dim, planes);
+  }
+  p.probes = translate_probes(scene, particles, p);
+
+  // The domain's extent is the bodies' bounding box less what the mirror supports take away.
+  for (int a = 0; a < dim; ++a)
+    p.planes[a] = cleaned(planes[a], p.bounding_box.lo[a], p.bounding_box.hi[a], p.tolerance());
+  return p;
+}
+
+} // namespace pdfem

@@ -1,0 +1,98 @@
+// A libpd scene read as a continuum problem: the facts pd-fem --scene needs to build the same
+// linear-elastic problem in deal.II, taken from libpd itself (pd::load_scene, the particles it
+// generates, the probes it resolves), so that every rule about a scene lives once, in libpd.
+// No deal.II here: scene_reference.cc turns this into meshes, constraints and loads.
+#pragma once
+
+#include "libpd/io/scene.hpp"
+
+#include <array>
+#include <cstdint>
+#include <set>
+#include <string>
+#include <vector>
+
+namespace pdfem {
+
+// The set of lattice cells (cell-centred convention: the cell of edge λ around a particle) a
+// load acts on: PD shares a load among these particles in proportion to their volumes, which is
+// a uniform force density over the union of their cells.
+struct LatticeCells {
+  pd::Vec3 origin{0, 0, 0};
+  double spacing = 1.;
+  int dim = 3;
+  std::set<std::array<long long, 3>> cells;
+
+  std::array<long long, 3> cell_of(const pd::Vec3& p) const;
+  bool contains(const pd::Vec3& p) const { return cells.count(cell_of(p)) > 0; }
+};
+
+struct SceneLoad {
+  std::string name;
+  bool density = false;    // true: `value` is a force density [N/m³] (kind body)
+  pd::Vec3 value{0, 0, 0}; // the total force [N] spread over `cells`, or the density
+  LatticeCells cells;
+};
+
+struct SceneProbe {
+  std::string name;
+  // displacement or stress (σ_cc) averaged over the probe's particles; reaction of a support
+  enum class Quantity { displacement, reaction, stress } quantity = Quantity::displacement;
+  int component = 0;
+  std::vector<pd::Vec3> points; // displacement, stress: the particles PD averages over
+  std::size_t support = 0;      // reaction: index into SceneProblem::supports
+};
+
+// A solid of the scene's geometry as Gmsh builds it: a box or one of pd::Region's shapes.
+using Solid = pd::Shape;
+
+// A region as solids: the union of `parts` less the union of `holes`.
+struct SolidRegion {
+  std::vector<Solid> parts;
+  std::vector<Solid> holes;
+};
+
+struct SceneProblem {
+  std::string path;
+  std::string title;
+  pd::ModelDimension dimension;
+  double spacing = 0.; // λ
+  std::vector<pd::Material> materials;
+  std::vector<pd::BodySpec> bodies;
+  std::vector<pd::Region> removed; // regions of mirror supports: behind the clamp planes
+  std::vector<pd::SupportSpec> supports;
+  std::vector<SceneLoad> loads;
+  std::vector<SceneProbe> probes;
+  // The same geometry as solids, for Gmsh: the bodies, and the mirror supports' regions that
+  // are taken out of them; `conforming`: boxes whose faces the mesh must contain (supports,
+  // loaded cells). `curved`: some shape is not a box, so the tensor-product grid cannot mesh it.
+  std::vector<SolidRegion> body_solids;
+  std::vector<SolidRegion> removed_solids;
+  std::vector<pd::Box> conforming;
+  std::vector<pd::Crack> cracks; // 2D segments: slits, both faces traction-free (Gmsh only)
+  bool curved = false;
+  pd::Box bounding_box;                      // of the domain
+  std::array<std::vector<double>, 3> planes; // per axis: every box face of the scene (sorted)
+
+  int dim() const { return dimension.dim; }
+  bool plane_stress() const { return dim() == 2 && dimension.plane == pd::PlaneMode::plane_stress; }
+  // "3D", "2D plane stress" or "2D plane strain".
+  std::string model_name() const;
+  // Is p in the continuum body: in a body's region (grown by `tol`) and not strictly inside a
+  // removed region (shrunk by `tol`)?
+  bool in_domain(const pd::Vec3& p, double tol = 0.) const;
+  // The body whose material holds at p (the first listed containing it, as the lattice does;
+  // a point in a hole goes to the body the hole is cut from); -1 outside every body.
+  int body_at(const pd::Vec3& p) const;
+  // Tolerance of region membership, as libpd's: 1e-6 λ.
+  double tolerance() const { return 1e-6 * spacing; }
+};
+
+// Read `path` with pd::load_scene (throws pd::SceneError) and translate it. Throws
+// std::runtime_error naming any feature the FE problem cannot represent (damage, plasticity,
+// an unsupported shape, a probe on no body point).
+SceneProblem read_scene_problem(const std::string& path);
+// The same for a scene already read (tests set the features the reader cannot express yet).
+SceneProblem translate_scene(const pd::Scene& scene);
+
+} // namespace pdfem

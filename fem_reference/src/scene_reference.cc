@@ -1,0 +1,488 @@
+// pd-fem --scene: a libpd scene's linear-elastic continuum problem in deal.II.
+//
+// The body is the union of the scene's body boxes, less the regions of mirror supports (their
+// particles stand behind the clamp plane; the continuum body ends on it) and less each region's
+// `minus` shapes. In the default cell-centred lattice the particles' volumes tile the boxes, so
+// the FE body is the boxes themselves:
+//
+//     -div σ(u) = b      in Ω,        σ = λ tr ε I + 2 μ ε   (λ → λ* in plane stress),
+//     u_c = g_c          on the nodes of fixed / displacement supports (component c),
+//     u = 0              on the clamp plane of a mirror support,
+//     σ n = 0            elsewhere on ∂Ω,
+//
+// with b the loads as PD applies them: a resultant F shared among the particles a load selects
+// in proportion to their volumes is the density F/V on the union of their lattice cells (V its
+// volume, times the thickness in 2D); a `body` load is its density on the same cells.
+//
+// The mesh is a tensor-product grid whose lines contain every box face of bodies, supports and
+// loaded cells, subdivided to a target size, with the cells outside Ω removed; each level
+// refines it globally (h, h/2, h/4, ...), so Richardson extrapolation with ratio 2 applies.
+// Probes read what PD reads: the mean of a displacement component over the particles libpd
+// resolves for the probe (evaluated at their positions), or a support's reaction, the sum of
+// the residual K u - f over the dofs it constrains.
+#include "scene_reference.h"
+
+#include "elastic_common.h"
+#include "report.h"
+#include "scene_mesh.h"
+
+#include <chrono>
+#include <cmath>
+#include <deal.II/base/quadrature_lib.h>
+#include <deal.II/dofs/dof_tools.h>
+#include <deal.II/fe/fe_q.h>
+#include <deal.II/fe/fe_values.h>
+#include <deal.II/fe/mapping_q.h>
+#include <deal.II/fe/mapping_q1.h>
+#include <deal.II/lac/dynamic_sparsity_pattern.h>
+#include <deal.II/numerics/fe_field_function.h>
+#include <iomanip>
+#include <iostream>
+#include <map>
+#include <set>
+
+namespace pdfem {
+namespace {
+double seconds_since(const std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+template <int dim>
+pd::Vec3 to_vec3(const Point<dim>& p) {
+  pd::Vec3 v{0, 0, 0};
+  for (unsigned int d = 0; d < dim; ++d)
+    v[d] = p[d];
+  return v;
+}
+
+template <int dim>
+Point<dim> to_point(const pd::Vec3& v) {
+  Point<dim> p;
+  for (unsigned int d = 0; d < dim; ++d)
+    p[d] = v[d];
+  return p;
+}
+
+const char* component_name(const int c) {
+  return c == 0 ? "x" : c == 1 ? "y" : "z";
+}
+
+} // namespace
+
+template <int dim>
+SceneReference<dim>::SceneReference(const SceneProblem& p, const SceneOptions& o)
+    : problem(p), options(o), fe(FE_Q<dim>(2), dim), use_gmsh(p.curved || o.gmsh) {
+  // Gmsh meshes may have curved boundary faces (scene_mesh.cc): map them with quadratics.
+  if (use_gmsh)
+    mapping = std::make_unique<MappingQ<dim>>(2);
+  else
+    mapping = std::make_unique<MappingQ1<dim>>();
+  AssertThrow(p.dim() == dim, ExcMessage("scene of another dimension"));
+  component.resize(fe.n_dofs_per_cell());
+  for (unsigned int i = 0; i < component.size(); ++i)
+    component[i] = fe.system_to_component_index(i).first;
+}
+
+namespace {
+// Unknowns of a Q2 vector field on n cells, roughly: 2^dim nodes per cell, dim components.
+double estimated_dofs(const int dim, const double cells) {
+  return dim * std::pow(2., dim) * cells;
+}
+} // namespace
+
+// Why: the budget of unknowns on the finest level: a few seconds for --coarse (3D 6e4, 2D
+// 1.5e5), a minute or two on one core otherwise (3D 3e5, 2D 6e5).
+template <int dim>
+double SceneReference<dim>::budget() const {
+  if (options.coarse)
+    return dim == 3 ? 6e4 : 1.5e5;
+  return dim == 3 ? 3e5 : 6e5;
+}
+
+template <int dim>
+void SceneReference<dim>::mesh(const double h0, const unsigned int level) {
+  if (use_gmsh) {
+    dof_handler.reset();
+    gmsh_mesh(problem, h0, level, options.output_directory / "mesh.msh", triangulation);
+  } else if (level == 0) {
+    dof_handler.reset();
+    box_grid(problem, h0, triangulation);
+  } else
+    triangulation.refine_global(1);
+  if (!dof_handler)
+    dof_handler = std::make_unique<DoFHandler<dim>>(triangulation);
+}
+
+// Why: box-only scenes get the tensor-product grid once and refine it globally (nested
+// meshes); scenes with curved shapes are meshed by Gmsh for every level (scene_mesh.h). The
+// level-0 size starts at the thinnest part of the body and doubles while three levels would
+// exceed the budget (thin layers keep their one cell across: the grid planes and Gmsh's
+// features bound the mesh from below). The DoFHandler is rebuilt with a new mesh: a
+// triangulation cannot be cleared under it.
+template <int dim>
+void SceneReference<dim>::make_grid(const unsigned int level) {
+  if (level > 0) {
+    mesh(base_size, level);
+    return;
+  }
+  base_size = base_cell_size(problem, use_gmsh);
+  mesh(base_size, 0);
+  for (int attempt = 0; attempt < 6; ++attempt) {
+    const auto cells = triangulation.n_active_cells();
+    if (estimated_dofs(dim, cells * std::pow(2., 2 * dim)) <= budget())
+      break;
+    mesh(2 * base_size, 0);
+    if (triangulation.n_active_cells() >= cells) { // no coarser mesh: keep the finer one
+      mesh(base_size, 0);
+      break;
+    }
+    base_size *= 2;
+  }
+}
+
+// Why: the default sequence ends at the last level that stays within the budget, with at
+// least three levels for Richardson extrapolation; --coarse runs three levels, --levels N
+// exactly N.
+template <int dim>
+unsigned int SceneReference<dim>::choose_levels() const {
+  if (options.levels > 0)
+    return options.levels;
+  if (options.coarse)
+    return 3;
+  const double dofs0 = estimated_dofs(dim, triangulation.n_active_cells());
+  unsigned int n = 1;
+  while (n < 8 && dofs0 * std::pow(2., dim * n) <= budget())
+    ++n;
+  return std::max(3u, n);
+}
+
+// Why: supports become constraints on the dofs whose support points they hold. A fixed or
+// displacement support holds the nodes in its region (closed, tolerance 1e-6 λ); a mirror
+// support clamps u = 0 on its plane's face of Ω, within the support's extent across the plane;
+// a symmetry support holds the normal component on its plane (within its region, or all of
+// the plane if the region is empty), the tangential ones stay free.
+// A later support overrides an earlier one on the same dof, as in libpd.
+template <int dim>
+void SceneReference<dim>::setup_system() {
+  dof_handler->distribute_dofs(fe);
+  const auto n = dof_handler->n_dofs();
+  std::vector<Point<dim>> points(n);
+  DoFTools::map_dofs_to_support_points(*mapping, *dof_handler, points);
+  dof_component.assign(n, 0);
+  std::vector<types::global_dof_index> dofs(fe.n_dofs_per_cell());
+  for (const auto& cell : dof_handler->active_cell_iterators()) {
+    cell->get_dof_indices(dofs);
+    for (unsigned int i = 0; i < dofs.size(); ++i)
+      dof_component[dofs[i]] = component[i];
+  }
+
+  const double tol = problem.tolerance();
+  std::map<types::global_dof_index, double> value;
+  support_dofs.assign(problem.supports.size(), {});
+  for (std::size_t s = 0; s < problem.supports.size(); ++s) {
+    const pd::SupportSpec& sup = problem.supports[s];
+    const bool whole_planes = sup.region.boxes.empty() && sup.region.shapes.empty();
+    for (types::global_dof_index i = 0; i < n; ++i) {
+      const pd::Vec3 p = to_vec3(points[i]);
+      const unsigned int c = dof_component[i];
+      const bool in_region = sup.region.contains(p, dim, tol);
+      bool held = false;
+      double g = 0.;
+      for (unsigned int a = 0; a < dim; ++a) {
+        const bool on_mirror = sup.mirror[a] && std::abs(p[a] - sup.mirror_at[a]) <= tol;
+        const bool on_symmetry = sup.symmetry[a] && c == a &&
+                                 std::abs(p[a] - sup.symmetry_at[a]) <= tol &&
+                                 (whole_planes || in_region);
+        held = held || (on_mirror && in_region) || on_symmetry;
+      }
+      if (in_region && sup.prescribed[c]) {
+        held = true;
+        g = sup.displacement[c];
+      } else if (in_region && sup.fixed[c])
+        held = true;
+      if (held) {
+        value[i] = g;
+        support_dofs[s].push_back(i);
+      }
+    }
+    if (support_dofs[s].empty())
+      throw std::runtime_error("support '" + sup.name + "' holds no node of the FE mesh");
+  }
+
+  constraints.clear();
+  for (const auto& [dof, g] : value) {
+    constraints.add_line(dof);
+    constraints.set_inhomogeneity(dof, g);
+  }
+  constraints.close();
+
+  DynamicSparsityPattern dsp(n);
+  DoFTools::make_sparsity_pattern(*dof_handler, dsp, constraints, false);
+  const IndexSet all_dofs = complete_index_set(n);
+  system_matrix.reinit(all_dofs, all_dofs, dsp, MPI_COMM_WORLD);
+  system_rhs.reinit(all_dofs, MPI_COMM_WORLD);
+  solution.reinit(n);
+}
+
+// Why: PD conserves each load's resultant exactly, so the density F/V uses the volume V of the
+// loaded cells as this mesh integrates it (the same number as the particles' volumes when the
+// mesh resolves the cells, which the grid planes ensure for box regions). In 2D the problem is
+// per unit thickness t: V = area · t.
+template <int dim>
+void SceneReference<dim>::measure_loads() {
+  const QGauss<dim> quadrature(fe.degree + 1);
+  FEValues<dim> fv(*mapping, fe, quadrature, update_quadrature_points | update_JxW_values);
+  std::vector<double> volume(problem.loads.size(), 0.);
+  for (const auto& cell : dof_handler->active_cell_iterators()) {
+    fv.reinit(cell);
+    for (const unsigned int q : fv.quadrature_point_indices())
+      for (std::size_t l = 0; l < problem.loads.size(); ++l)
+        if (problem.loads[l].cells.contains(to_vec3(fv.quadrature_point(q))))
+          volume[l] += fv.JxW(q);
+  }
+  const double thickness = dim == 2 ? problem.dimension.thickness : 1.;
+  load_density.assign(problem.loads.size(), Tensor<1, dim>());
+  for (std::size_t l = 0; l < problem.loads.size(); ++l) {
+    const SceneLoad& load = problem.loads[l];
+    if (volume[l] <= 0.)
+      throw std::runtime_error("load '" + load.name + "': its cells hold no part of the body");
+    for (unsigned int c = 0; c < dim; ++c)
+      load_density[l][c] = load.density ? load.value[c] : load.value[c] / (volume[l] * thickness);
+  }
+}
+
+// Why: one cell's stiffness (elastic_common.h, with the Lamé constants of the body that holds
+// the cell's centre, E scaled by the material's stiffness factor as PD scales c) and its load
+// vector ∫ b·φ_i over the quadrature points inside each load's cells.
+template <int dim>
+void SceneReference<dim>::cell_system(const typename DoFHandler<dim>::active_cell_iterator& cell,
+                                      FEValues<dim>& fv, FullMatrix<double>& cell_matrix,
+                                      Vector<double>& cell_rhs) const {
+  const unsigned int n = fe.n_dofs_per_cell();
+  cell_matrix.reinit(n, n);
+  cell_rhs.reinit(n);
+  fv.reinit(cell);
+  const int body = problem.body_at(to_vec3(cell->center()));
+  if (body < 0)
+    throw std::runtime_error("a cell of the mesh lies in no body (at " +
+                             std::to_string(cell->center()[0]) + ", " +
+                             std::to_string(cell->center()[1]) + ")");
+  const pd::Material& m = problem.materials.at(static_cast<std::size_t>(
+      problem.bodies.at(static_cast<std::size_t>(std::max(body, 0))).material));
+  const LameConstants lame = lame_constants(m.youngs_modulus * m.stiffness_factor, m.poisson_ratio,
+                                            problem.plane_stress());
+  std::vector<Tensor<1, dim>> grad;
+  add_elastic_cell_matrix(fv, component, lame, grad, cell_matrix);
+  for (const unsigned int q : fv.quadrature_point_indices()) {
+    const pd::Vec3 x = to_vec3(fv.quadrature_point(q));
+    for (std::size_t l = 0; l < problem.loads.size(); ++l)
+      if (problem.loads[l].cells.contains(x))
+        for (unsigned int i = 0; i < n; ++i)
+          cell_rhs(i) += fv.shape_value_component(i, q, component[i]) *
+                         load_density[l][component[i]] * fv.JxW(q);
+  }
+}
+
+template <int dim>
+void SceneReference<dim>::assemble_system() {
+  measure_loads();
+  const QGauss<dim> quadrature(fe.degree + 1);
+  FEValues<dim> fv(*mapping, fe, quadrature,
+                   update_values | update_gradients | update_quadrature_points | update_JxW_values);
+  FullMatrix<double> cell_matrix;
+  Vector<double> cell_rhs;
+  std::vector<types::global_dof_index> dofs(fe.n_dofs_per_cell());
+  for (const auto& cell : dof_handler->active_cell_iterators()) {
+    cell_system(cell, fv, cell_matrix, cell_rhs);
+    cell->get_dof_indices(dofs);
+    constraints.distribute_local_to_global(cell_matrix, cell_rhs, dofs, system_matrix, system_rhs);
+  }
+  system_matrix.compress(VectorOperation::add);
+  system_rhs.compress(VectorOperation::add);
+}
+
+template <int dim>
+void SceneReference<dim>::solve() {
+  Point<dim> centre;
+  for (unsigned int a = 0; a < dim; ++a)
+    centre[a] = (problem.bounding_box.lo[a] + problem.bounding_box.hi[a]) / 2;
+  const CgStatistics stats = solve_elasticity(*dof_handler, system_matrix, system_rhs, constraints,
+                                              centre, "AMG", 1e-10, 10000, solution);
+  levels.back().iterations = stats.iterations;
+}
+
+// Why: the force a support exerts on the body is what equilibrium lacks without it: at its
+// dofs K u = f + R, so R = K u - f, summed over the dofs of the probe's component (in 2D times
+// the thickness: the FE problem is per unit thickness, PD's forces are in N).
+template <int dim>
+double SceneReference<dim>::reaction(const SceneProbe& probe) const {
+  const QGauss<dim> quadrature(fe.degree + 1);
+  FEValues<dim> fv(*mapping, fe, quadrature,
+                   update_values | update_gradients | update_quadrature_points | update_JxW_values);
+  std::set<types::global_dof_index> wanted;
+  for (const auto i : support_dofs.at(probe.support))
+    if (dof_component[i] == static_cast<unsigned int>(probe.component))
+      wanted.insert(i);
+  if (wanted.empty())
+    throw std::runtime_error("reaction probe '" + probe.name + "': support '" +
+                             problem.supports.at(probe.support).name + "' does not hold " +
+                             component_name(probe.component));
+  FullMatrix<double> cell_matrix;
+  Vector<double> cell_rhs;
+  const unsigned int n = fe.n_dofs_per_cell();
+  Vector<double> u(n), r(n);
+  std::vector<types::global_dof_index> dofs(n);
+  double sum = 0.;
+  for (const auto& cell : dof_handler->active_cell_iterators()) {
+    cell->get_dof_indices(dofs);
+    if (std::none_of(dofs.begin(), dofs.end(), [&](auto i) { return wanted.count(i) > 0; }))
+      continue;
+    cell_system(cell, fv, cell_matrix, cell_rhs);
+    cell->get_dof_values(solution, u);
+    cell_matrix.vmult(r, u);
+    for (unsigned int i = 0; i < n; ++i)
+      if (wanted.count(dofs[i]))
+        sum += r(i) - cell_rhs(i);
+  }
+  return dim == 2 ? sum * problem.dimension.thickness : sum;
+}
+
+template <int dim>
+void SceneReference<dim>::evaluate_probes() {
+  Functions::FEFieldFunction<dim> field(*dof_handler, solution, *mapping);
+  auto& values = levels.back().values;
+  for (const SceneProbe& probe : problem.probes) {
+    if (probe.quantity == SceneProbe::Quantity::reaction) {
+      values.push_back(reaction(probe));
+      continue;
+    }
+    std::vector<Point<dim>> points;
+    for (const pd::Vec3& x : probe.points)
+      points.push_back(to_point<dim>(x));
+    double sum = 0.;
+    if (probe.quantity == SceneProbe::Quantity::displacement) {
+      std::vector<Vector<double>> u(points.size(), Vector<double>(dim));
+      field.vector_value_list(points, u);
+      for (const auto& v : u)
+        sum += v[probe.component];
+    } else {
+      std::vector<std::vector<Tensor<1, dim>>> grad(points.size(),
+                                                    std::vector<Tensor<1, dim>>(dim));
+      field.vector_gradient_list(points, grad);
+      for (std::size_t k = 0; k < points.size(); ++k)
+        sum += normal_stress(probe.points[k], grad[k], probe.component);
+    }
+    values.push_back(sum / static_cast<double>(points.size()));
+  }
+}
+
+// Why: PD's stress probe reads σ_cc; here σ_cc = λ tr ε + 2μ ε_cc of the body's material at x
+// (plane stress: λ*; the out-of-plane σ_zz of a 2D model is λ tr ε in plane strain, 0 in plane
+// stress).
+template <int dim>
+double SceneReference<dim>::normal_stress(const pd::Vec3& x,
+                                          const std::vector<Tensor<1, dim>>& grad,
+                                          const int c) const {
+  const int body = problem.body_at(x);
+  const pd::Material& m = problem.materials.at(static_cast<std::size_t>(
+      problem.bodies.at(static_cast<std::size_t>(std::max(body, 0))).material));
+  const LameConstants lame = lame_constants(m.youngs_modulus * m.stiffness_factor, m.poisson_ratio,
+                                            problem.plane_stress());
+  double trace = 0.;
+  for (unsigned int d = 0; d < dim; ++d)
+    trace += grad[d][d];
+  if (c >= dim)
+    return problem.plane_stress() ? 0. : lame.lambda * trace;
+  return lame.lambda * trace + 2. * lame.mu * grad[c][c];
+}
+
+// Why: fe.json is what `pd verify` reads beside the PD run: per level the mesh and time, per
+// probe the values of every level, the best estimate (Richardson-extrapolated when the last
+// three levels are in the asymptotic range, else the finest value), its estimated error
+// |extrapolated - finest| (or the last difference) and the observed order.
+template <int dim>
+void SceneReference<dim>::output_results(const double wall_time) const {
+  write_atomically(options.output_directory / "fe.json", [&](std::ostream& out) {
+    JsonWriter w(out);
+    w.begin_object();
+    w.value("scene", problem.path);
+    w.value("dimension", dim);
+    w.value("model", problem.model_name());
+    w.value("wall_time_s", wall_time);
+    w.begin_array("levels");
+    for (const SceneLevel& l : levels) {
+      w.begin_object();
+      w.value("cells", l.cells);
+      w.value("dofs", static_cast<unsigned long>(l.dofs));
+      w.value("h", l.h);
+      w.value("seconds", l.seconds);
+      w.end_object();
+    }
+    w.end_array();
+    w.begin_array("probes");
+    for (std::size_t k = 0; k < problem.probes.size(); ++k) {
+      const SceneProbe& probe = problem.probes[k];
+      std::vector<double> values;
+      for (const SceneLevel& l : levels)
+        values.push_back(l.values[k]);
+      const Richardson r = richardson(values, 2.);
+      w.begin_object();
+      w.value("name", probe.name);
+      w.value("quantity", probe.quantity == SceneProbe::Quantity::reaction ? "reaction"
+                          : probe.quantity == SceneProbe::Quantity::stress ? "stress"
+                                                                           : "displacement");
+      w.value("component", component_name(probe.component));
+      w.begin_array("values");
+      for (const double v : values)
+        w.value("", v);
+      w.end_array();
+      w.value("value", r.extrapolated);
+      w.value("error_estimate", r.error_estimate);
+      w.value("observed_order", r.order);
+      w.end_object();
+    }
+    w.end_array();
+    w.end_object();
+  });
+}
+
+template <int dim>
+std::vector<SceneLevel> SceneReference<dim>::run() {
+  const auto t_start = std::chrono::steady_clock::now();
+  unsigned int n_levels = 0;
+  for (unsigned int level = 0; level == 0 || level < n_levels; ++level) {
+    const auto t0 = std::chrono::steady_clock::now();
+    make_grid(level);
+    if (level == 0)
+      n_levels = choose_levels();
+    levels.emplace_back();
+    SceneLevel& l = levels.back();
+    setup_system();
+    l.cells = triangulation.n_active_cells();
+    l.dofs = dof_handler->n_dofs();
+    l.h = base_size / std::pow(2., level);
+    assemble_system();
+    solve();
+    evaluate_probes();
+    l.seconds = seconds_since(t0);
+    std::cerr << "[" << std::filesystem::path(problem.path).stem().string() << "] level " << level
+              << "/" << n_levels - 1 << ": " << l.cells << " cells, " << l.dofs
+              << " dofs, h = " << std::setprecision(4) << l.h << " m, " << l.iterations
+              << " CG its, " << std::setprecision(3) << l.seconds << " s;";
+    for (std::size_t k = 0; k < problem.probes.size(); ++k)
+      std::cerr << " " << problem.probes[k].name << " = " << std::setprecision(8) << l.values[k];
+    std::cerr << std::endl;
+  }
+  output_results(seconds_since(t_start));
+  return levels;
+}
+
+std::vector<SceneLevel> solve_scene(const SceneProblem& problem, const SceneOptions& options) {
+  if (problem.dim() == 2)
+    return SceneReference<2>(problem, options).run();
+  return SceneReference<3>(problem, options).run();
+}
+
+template class SceneReference<2>;
+template class SceneReference<3>;
+} // namespace pdfem

@@ -1,0 +1,93 @@
+// pd-fem --scene: the linear-elastic continuum problem of a libpd scene (scene_problem.h) solved
+// with deal.II on a sequence of refined meshes, with Richardson extrapolation per probe.
+#pragma once
+
+#include "scene_problem.h"
+
+#include <deal.II/dofs/dof_handler.h>
+#include <deal.II/fe/fe_system.h>
+#include <deal.II/fe/fe_values.h>
+#include <deal.II/fe/mapping.h>
+#include <deal.II/grid/tria.h>
+#include <deal.II/lac/affine_constraints.h>
+#include <deal.II/lac/full_matrix.h>
+#include <deal.II/lac/trilinos_sparse_matrix.h>
+#include <deal.II/lac/trilinos_vector.h>
+#include <deal.II/lac/vector.h>
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace pdfem {
+using namespace dealii;
+
+struct SceneOptions {
+  unsigned int levels = 0; // 0: as many as fit the default budget (at least 3)
+  bool coarse = false;     // 3 levels: a quick run for the tests
+  bool gmsh = false;       // mesh with Gmsh even if every shape is a box
+  std::filesystem::path output_directory;
+};
+
+struct SceneLevel {
+  unsigned int cells = 0;
+  types::global_dof_index dofs = 0;
+  double h = 0.;       // target cell size of the level, m
+  double seconds = 0.; // wall time of the level
+  unsigned int iterations = 0;
+  std::vector<double> values; // one per probe
+};
+
+// Solve the scene's problem in its dimension and write fe.json into the output directory;
+// returns the levels (each with one value per probe).
+std::vector<SceneLevel> solve_scene(const SceneProblem& problem, const SceneOptions& options);
+
+template <int dim>
+class SceneReference {
+public:
+  SceneReference(const SceneProblem& problem, const SceneOptions& options);
+  // Solve on the levels, then write fe.json.
+  std::vector<SceneLevel> run();
+
+private:
+  void make_grid(unsigned int level);
+  void setup_system();
+  void assemble_system();
+  void solve();
+  void evaluate_probes();
+  void output_results(double wall_time) const;
+
+  unsigned int choose_levels() const;
+  double budget() const;
+  void mesh(double h0, unsigned int level);
+  void measure_loads();
+  void cell_system(const typename DoFHandler<dim>::active_cell_iterator& cell,
+                   FEValues<dim>& fe_values, FullMatrix<double>& cell_matrix,
+                   Vector<double>& cell_rhs) const;
+  double reaction(const SceneProbe& probe) const;
+  double normal_stress(const pd::Vec3& x, const std::vector<Tensor<1, dim>>& grad, int c) const;
+
+  const SceneProblem& problem;
+  const SceneOptions options;
+
+  Triangulation<dim> triangulation;
+  const FESystem<dim> fe;
+  const bool use_gmsh;
+  std::unique_ptr<Mapping<dim>> mapping;
+  std::unique_ptr<DoFHandler<dim>> dof_handler;
+  AffineConstraints<double> constraints;
+  std::vector<unsigned int> component; // of each local shape function
+  std::vector<types::global_dof_index> dof_component;
+
+  TrilinosWrappers::SparseMatrix system_matrix;
+  TrilinosWrappers::MPI::Vector system_rhs;
+  Vector<double> solution;
+
+  double base_size = 0.; // target cell size of level 0
+  // Per support: the dofs it constrains (a reaction probe sums the residual over them).
+  std::vector<std::vector<types::global_dof_index>> support_dofs;
+  // Per load: force density [N/m³] on its cells on this level's mesh.
+  std::vector<Tensor<1, dim>> load_density;
+  std::vector<SceneLevel> levels;
+};
+} // namespace pdfem
