@@ -1,5 +1,7 @@
 #include "libpd/discretisation/model.hpp"
 
+#include "libpd/discretisation/bond_cuts.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -567,39 +569,6 @@ void drop_bonds_without_stiffness(BondFamily& family, std::vector<double>& facto
   factor = std::move(kept_factor);
 }
 
-/// Pre-cracks: the bonds that cross a crack leave the family (both directions, so it stays
-/// symmetric); returns the pairs each crack removed.
-std::vector<std::size_t> cut_bonds_across_cracks(const ModelSpec& spec, const ParticleSet& ps,
-                                                 BondFamily& family) {
-  std::vector<std::size_t> cut(spec.cracks.size(), 0);
-  if (spec.cracks.empty()) {
-    return cut;
-  }
-  const int dim = spec.dimension.dim;
-  BondFamily kept;
-  kept.offsets.reserve(family.offsets.size());
-  kept.offsets.push_back(0);
-  for (std::size_t i = 0; i + 1 < family.offsets.size(); ++i) {
-    for (std::size_t k = family.offsets[i]; k < family.offsets[i + 1]; ++k) {
-      const std::size_t j = family.neighbour[k];
-      bool crossed = false;
-      for (std::size_t c = 0; c < spec.cracks.size() && !crossed; ++c) {
-        if (spec.cracks[c].cuts(ps.position[i], ps.position[j], dim)) {
-          crossed = true;
-          cut[c] += i < j ? 1 : 0;
-        }
-      }
-      if (!crossed) {
-        kept.neighbour.push_back(family.neighbour[k]);
-        kept.inverse_length.push_back(family.inverse_length[k]);
-      }
-    }
-    kept.offsets.push_back(kept.neighbour.size());
-  }
-  family = std::move(kept);
-  return cut;
-}
-
 /// The virtual-fibre model's arms (fibre_arms.hpp) and, as its per-bond field, the pair
 /// stiffness that bounds its operator (for the time step and ADR). Arms between two extrapolated
 /// particles carry nothing and leave the family, as for the bond-based model.
@@ -697,7 +666,8 @@ Model build_model(const ModelSpec& spec, ParticleSet particles) {
   } else {
     m.family = point_cloud_family(spec, m.particles);
   }
-  m.bonds_cut_by_crack = cut_bonds_across_cracks(spec, m.particles, m.family);
+  m.bonds_cut_by_crack = cut_bonds_across_cracks_and_holes(
+      dim, spec.lattice.spacing, spec.cracks, spec.bodies, m.particles, body_count, m.family);
   take_material_of_nearest_body_particle(m.family, body_count, m.particles);
   m.constraints = support_constraints(spec, m.particles, body_count);
   m.extrapolated = extrapolated_particles(spec, m.particles, body_count, m.family, m.constraints);
