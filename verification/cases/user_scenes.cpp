@@ -38,6 +38,12 @@ std::map<std::string, double> run_probes(const Context& ctx, const std::string& 
   return out.probes;
 }
 
+/// Half the length of the scene's first crack (a segment along x).
+double crack_half_length(const Scene& s) {
+  const Crack& c = s.model.cracks.at(0);
+  return 0.5 * std::abs(c.vertices[1][0] - c.vertices[0][0]);
+}
+
 /// half / full − 1 for every probe of the half model; reactions of the half carry half the load.
 Json compare_half_full(const std::map<std::string, double>& full,
                        const std::map<std::string, double>& half, double& worst) {
@@ -82,8 +88,7 @@ Json run_crack_opening(const Context& ctx) {
   out["case"] = "crack-opening";
   out["quantity"] = "crack opening at the centre / (4 σ a / E), σ = grip force / (W t)";
   const Scene base = load_scene((ctx.scenes_dir / "user/crack-plate-2d.yaml").string());
-  const double a = 0.5 * std::abs(base.model.cracks.at(0).vertices[1][0] -
-                                  base.model.cracks.at(0).vertices[0][0]);
+  const double a = crack_half_length(base);
   const double width = base.model.bodies.at(0).region.boxes.at(0).hi[0] -
                        base.model.bodies.at(0).region.boxes.at(0).lo[0];
   const double thickness = base.model.dimension.thickness;
@@ -146,8 +151,7 @@ Json run_fracture_stop(const Context& ctx) {
   out["status"] = to_string(r.result.status);
   out["message"] = r.result.message;
   const double width = s.model.bodies.at(0).region.boxes.at(0).hi[0];
-  const double a =
-      0.5 * std::abs(s.model.cracks.at(0).vertices[1][0] - s.model.cracks.at(0).vertices[0][0]);
+  const double a = crack_half_length(s);
   const Material& m = s.model.materials.at(0);
   // Griffith, plane stress: σ_f = √(E G / (π a)); reported beside the PD value, not gated: a is
   // a few spacings here and the ramp is not quasi-static.

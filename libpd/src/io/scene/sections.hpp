@@ -53,6 +53,18 @@ constexpr Key boxes_key(std::string_view doc, std::string_view example) {
           .show = Show::commented};
 }
 
+/// A key holding a shape (`cylinder`, `sphere`, `half_space`): one of the alternatives of group 1,
+/// beside `box`.
+constexpr Key shape_key(std::string_view name, std::string_view doc, const Section* section) {
+  return {.name = name,
+          .type = Type::section,
+          .doc = doc,
+          .need = Need::one_of,
+          .group = 1,
+          .show = Show::commented,
+          .section = section};
+}
+
 /// A region that the scene must not leave empty, with what to say if it is.
 struct RegionUse {
   Region region;
