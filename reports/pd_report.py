@@ -9,6 +9,7 @@ Stages (each cached under DIR/cache/ by a hash of its inputs; see reports/README
   fem:*        deal.II references: the gold files are used, and `pd-fem PRM --coarse --check GOLD`
                proves the current pd-fem still reproduces them (--full: the full pd-fem run).
   verify:*     `pd verify CASE` for every case of `pd verify --list`.
+  scene:*      `pd verify SCENE.yaml --fe-coarse` for every elastic scene of verification/scenes/user/.
   sweep:*      `pd verify --sweep CASE` (accuracy vs time).
   stability    `pd stability SCENE... --json`.
   compare:*    `pd compare dynamic|quasistatic -o FILE.jsonl`.
@@ -94,6 +95,7 @@ def build_stages(ctx: S.Ctx, records: dict[str, dict]) -> list[S.Stage]:
     # lists them as not run, with the reason.
     stages += [S.verify_stage(ctx, c, summary) for c, summary in cases
                if not c.endswith("-sweep") and (ctx.full or "(slow)" not in summary)]
+    stages += [S.scene_stage(ctx, p) for p in S.user_scenes(ctx)]
     sweep_cases = [c for c in order if structures[c].has_sweep] if ctx.full else DEFAULT_SWEEP_CASES
     stages += [S.sweep_stage(ctx, c, listed) for c in sweep_cases]
     stages.append(S.stability_stage(ctx, FULL_STABILITY_SCENES if ctx.full else DEFAULT_STABILITY_SCENES))

@@ -323,6 +323,39 @@ def verify_stage(ctx: Ctx, case: str, summary: str) -> Stage:
                  parallel=True)
 
 
+# ---- scenes a new user writes, against deal.II ---------------------------------------------------
+
+def user_scenes(ctx: Ctx) -> list[Path]:
+    """verification/scenes/user/*.yaml that pd-fem can solve (elastic: no damage effect)."""
+    out = []
+    for p in sorted((ctx.root / "verification" / "scenes" / "user").glob("*.yaml")):
+        if not re.search(r"^effects:.*damage", p.read_text(), re.M):
+            out.append(p)
+    return out
+
+
+def scene_stage(ctx: Ctx, scene: Path) -> Stage:
+    """`pd verify SCENE.yaml --fe-coarse`: the scene's PD run beside pd-fem --scene."""
+    name = scene.stem
+    work = ctx.work / "scene" / name
+    cmd = [str(ctx.pd), "verify", str(scene), "--fe-coarse", "-o", str(work)]
+
+    def fn(ctx: Ctx, st: Stage) -> dict:
+        target = work / f"{name}.json"
+        if work.exists():
+            shutil.rmtree(work)
+        run(ctx, cmd, f"scene-{name}", env=st.env)
+        if not target.exists():
+            raise StageFailed(f"`{shlex.join(cmd)}` wrote no {target.name}")
+        data = json.loads(target.read_text())
+        drop_bulky(work)
+        return data
+
+    return Stage(f"scene:{name}", "scene", f"pd verify {ctx.rel(scene)}", [cmd],
+                 [ctx.pd, ctx.bin / "pd-fem", scene], fn, default_seconds=40,
+                 env={"OMP_NUM_THREADS": "1", "DEAL_II_NUM_THREADS": "1"}, parallel=True)
+
+
 # ---- sweeps ------------------------------------------------------------------------------------
 
 def quick_sweep_tree(ctx: Ctx, case: str) -> Path:
