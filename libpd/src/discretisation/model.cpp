@@ -349,7 +349,9 @@ std::vector<SymmetryPlane> symmetry_planes(const ModelSpec& spec, const Particle
 /// With these, the half model's energy is exactly half the symmetric full model's (bonds into
 /// ghosts count ½), so both have the same equilibrium. Sites without an image keep their fit.
 ExtrapolatedParticles symmetry_images(const ModelSpec& spec, const ParticleSet& particles,
-                                      std::size_t body_count, ExtrapolatedParticles fitted) {
+                                      std::size_t body_count,
+                                      const std::vector<SymmetryPlane>& sides,
+                                      ExtrapolatedParticles fitted) {
   struct Plane {
     std::size_t axis;
     double at;
@@ -359,9 +361,7 @@ ExtrapolatedParticles symmetry_images(const ModelSpec& spec, const ParticleSet& 
   std::vector<Plane> planes;
   const int dim = spec.dimension.dim;
   const double tol = region_tolerance(spec);
-  // The sides once (they read every body particle), then each plane with its support's region.
-  const std::vector<SymmetryPlane> sides = symmetry_planes(spec, particles, body_count);
-  std::size_t next = 0;
+  std::size_t next = 0; // `sides` lists the planes in this order
   for (const SupportSpec& sup : spec.supports) {
     for (std::size_t a = 0; a < 3; ++a) {
       if (sup.symmetry[a]) {
@@ -465,11 +465,11 @@ ExtrapolatedParticles extrapolated_particles(const ModelSpec& spec, const Partic
   if (fitted.empty()) {
     return {};
   }
-  return symmetry_images(spec, particles, body_count,
+  const std::vector<SymmetryPlane> symmetry = symmetry_planes(spec, particles, body_count);
+  return symmetry_images(spec, particles, body_count, symmetry,
                          extrapolation_ties(spec.dimension.dim, spec.lattice.spacing,
                                             particles.position, family, dependent, fitted,
-                                            clamp_planes(spec),
-                                            symmetry_planes(spec, particles, body_count)));
+                                            clamp_planes(spec), symmetry));
 }
 
 /// The loads as force densities [N/m³] per dof (empty without loads): a resultant is shared in
