@@ -26,12 +26,17 @@ namespace pd::verification {
 
 namespace {
 
-std::map<std::string, double> run_probes(const Context& ctx, const std::string& scene,
-                                         const std::string& run_name) {
-  const Scene s = load_scene((ctx.scenes_dir / scene).string());
+/// A run of the case into its folder ctx.output_dir/run_name, without VTU files.
+RunOutcome run_case_scene(const Context& ctx, const Scene& s, const std::string& run_name) {
   RunOptions options = case_run_options(ctx, run_name);
   options.write_vtu = false;
-  const RunOutcome out = run_scene(s, options);
+  return run_scene(s, options);
+}
+
+std::map<std::string, double> run_probes(const Context& ctx, const std::string& scene,
+                                         const std::string& run_name) {
+  const RunOutcome out =
+      run_case_scene(ctx, load_scene((ctx.scenes_dir / scene).string()), run_name);
   if (out.result.status == RunStatus::unstable) {
     throw std::runtime_error(scene + ": " + out.result.message);
   }
@@ -109,9 +114,7 @@ Json run_crack_opening(const Context& ctx) {
     s.model.supports[1].region.boxes[0].lo[1] = top - h;
     s.probes[0].point[1] = mid + 0.5 * h;
     s.probes[1].point[1] = mid - 0.5 * h;
-    RunOptions options = case_run_options(ctx, fmt::format("crack-opening/h{}", h));
-    options.write_vtu = false;
-    const RunOutcome r = run_scene(s, options);
+    const RunOutcome r = run_case_scene(ctx, s, fmt::format("crack-opening/h{}", h));
     const double opening = r.probes.at("upper_face") - r.probes.at("lower_face");
     const double sigma = r.probes.at("grip_force") / (width * thickness);
     const double closed_form = 4 * sigma * a / youngs;
@@ -145,9 +148,7 @@ Json run_fracture_stop(const Context& ctx) {
   out["case"] = "fracture-stop";
   out["quantity"] = "failure load of a pre-cracked glass plate from the grip's reaction";
   const Scene s = load_scene((ctx.scenes_dir / "user/fracture-centre-crack.yaml").string());
-  RunOptions options = case_run_options(ctx, "fracture-stop");
-  options.write_vtu = false;
-  const RunOutcome r = run_scene(s, options);
+  const RunOutcome r = run_case_scene(ctx, s, "fracture-stop");
   out["status"] = to_string(r.result.status);
   out["message"] = r.result.message;
   const double width = s.model.bodies.at(0).region.boxes.at(0).hi[0];
