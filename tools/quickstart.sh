@@ -24,6 +24,7 @@ packages=(
   libeigen3-dev libyaml-cpp-dev libcli11-dev libfmt-dev
   libgtest-dev libgmock-dev libbenchmark-dev libhwy-dev
   libsundials-dev libdeal.ii-dev libsuitesparse-dev
+  libopenmpi-dev openmpi-bin libtrilinos-zoltan-dev
   libopenblas0-openmp
   python3 python3-matplotlib python3-yaml chromium
 )

@@ -14,6 +14,7 @@
 // Exit codes: 0 success, 1 bad input or usage, 2 a verification gate failed, 3 the run became
 // unstable, 4 a stability gate failed, 5 the run was interrupted (Ctrl-C, SIGTERM, SIGHUP).
 #include "commands.hpp"
+#include "libpd/core/communicator.hpp"
 #include "libpd/core/text.hpp"
 
 #include <algorithm>
@@ -47,6 +48,9 @@ std::string argument_error(int argc, char** argv) {
 } // namespace
 
 int main(int argc, char** argv) {
+  // Under mpirun every rank runs this main; MPI lives as long as it (a no-op without MPI).
+  const pd::MpiSession mpi(argc, argv);
+  const bool split = pd::world_communicator().size() > 1;
   CLI::App app{"pd — bond-based peridynamics with its own verification"};
   app.require_subcommand(1);
   const std::vector<pd::cli::Command> commands = {
@@ -79,9 +83,17 @@ int main(int argc, char** argv) {
     }
   } catch (const pd::SceneError& e) {
     fmt::print(stderr, "{}\n", pd::printable_words(e.what(), long_word_bytes));
+    if (split) { // the other ranks may be waiting for this one: stop them all
+      pd::MpiSession::abort(1);
+    }
     return 1;
   } catch (const std::exception& e) {
-    fmt::print(stderr, "error: {}\n", pd::printable_words(e.what(), long_word_bytes));
+    fmt::print(stderr, "error: {}{}\n",
+               split ? fmt::format("rank {}: ", pd::world_communicator().rank()) : "",
+               pd::printable_words(e.what(), long_word_bytes));
+    if (split) {
+      pd::MpiSession::abort(1);
+    }
     return 1;
   }
   return 0;

@@ -3,11 +3,14 @@
 #include "libpd/app/run.hpp"
 
 #include "commands.hpp"
+#include "libpd/app/run_checkpoints.hpp"
 #include "libpd/app/run_summary.hpp"
+#include "libpd/core/communicator.hpp"
 #include "libpd/core/text.hpp"
 
 #include <chrono>
 #include <cstring>
+#include <filesystem>
 #include <fmt/format.h>
 #include <memory>
 #include <unistd.h>
@@ -25,6 +28,7 @@ struct RunArgs {
   std::string checkpoint;
   std::string restart;
   bool overwrite = false;
+  std::string partition = "rcb";
 };
 
 void print_report(const RunArgs& a, const RunOutcome& out, double scene_seconds) {
@@ -85,8 +89,23 @@ int run(const RunArgs& a) {
   opt.restart = a.restart;
   opt.overwrite = a.overwrite;
   opt.on_warning = [](const std::string& w) { fmt::print(stderr, "warning: {}\n", w); };
+  // Under mpirun the run is split over the ranks (app/run_options.hpp); rank 0 reports.
+  const Communicator& world = world_communicator();
+  opt.communicator = &world;
+  opt.partition = from_name<PartitionMethod>(a.partition).value_or(PartitionMethod::rcb);
+  opt.progress = opt.progress && world.root();
   const RunOutcome out = run_scene(scene, opt);
+  if (!world.root()) {
+    return out.result.status == RunStatus::unstable      ? 3
+           : out.result.status == RunStatus::interrupted ? exit_interrupted
+                                                         : 0;
+  }
   print_report(a, out, opt.scene_seconds);
+  if (const Json* d = out.summary.find("distribution"); d != nullptr) {
+    fmt::print("split over {} MPI ranks ({} partition): summary.json `distribution` has the "
+               "particles, halo, memory and halo bytes per step of each rank\n",
+               world.size(), a.partition);
+  }
   if (!out.checkpoint_note.empty()) {
     fmt::print(stderr, "warning: {}\n", out.checkpoint_note);
   }
@@ -123,10 +142,21 @@ Command add_run_command(CLI::App& app) {
   cmd->add_flag("--overwrite", a->overwrite,
                 "reuse an output folder that holds another run's files: first remove exactly the "
                 "files its manifest.txt lists");
+  cmd->add_option("--partition", a->partition,
+                  "under mpirun: how particles are split over the ranks")
+      ->check(CLI::IsMember(enum_word_list<PartitionMethod>()))
+      ->capture_default_str();
   cmd->add_option("--restart", a->restart,
                   "continue from a checkpoint of the same scene; the result is bitwise that of an "
-                  "uninterrupted run")
-      ->check(CLI::ExistingFile);
+                  "uninterrupted run (under mpirun: the name given to --checkpoint, or "
+                  "OUTDIR/checkpoint.pdcp; each rank reads its own piece)")
+      ->check(CLI::Validator(
+          [](const std::string& path) {
+            const auto mine = rank_file(path, world_communicator());
+            return std::filesystem::is_regular_file(mine) ? std::string{}
+                                                          : "File does not exist: " + mine.string();
+          },
+          "FILE"));
   return {cmd, [a] { return run(*a); }};
 }
 

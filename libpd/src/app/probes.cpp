@@ -106,36 +106,63 @@ std::vector<ResolvedProbe> resolve_probes(const std::vector<ProbeSpec>& probes,
     if (r.particles.empty()) {
       throw std::runtime_error("probe '" + p.name + "' selects no particle");
     }
+    r.count = r.particles.size();
     out.push_back(std::move(r));
   }
   return out;
 }
 
+std::vector<ResolvedProbe> localise_probes(std::vector<ResolvedProbe> probes, const Model& local) {
+  const Ownership& own = local.ownership;
+  std::vector<std::int64_t> local_of(own.global_particles, -1);
+  for (std::size_t i = 0; i < local.size(); ++i) {
+    if (own.owns(i)) {
+      local_of[own.global(i)] = static_cast<std::int64_t>(i);
+    }
+  }
+  for (ResolvedProbe& p : probes) {
+    std::vector<std::uint32_t> mine;
+    for (const std::uint32_t g : p.particles) {
+      if (local_of[g] >= 0) {
+        mine.push_back(static_cast<std::uint32_t>(local_of[g]));
+      }
+    }
+    p.particles = std::move(mine);
+    if (!p.dependant.empty()) {
+      p.dependant = energy_dependants(local.size(), local.spec.mirror_coupling, local.constraints,
+                                      local.extrapolated);
+    }
+  }
+  return probes;
+}
+
 double probe_value(const ResolvedProbe& probe, const Simulation& sim) {
   const Model& model = sim.model();
-  double sum = 0;
+  // Exact, and over the particles this rank owns: the same value on any number of ranks.
+  ExactSum sum;
   for (std::uint32_t i : probe.particles) {
     switch (probe.quantity) {
     case ProbeSpec::Quantity::displacement:
-      sum += sim.displacement(i, probe.component);
+      sum.add(sim.displacement(i, probe.component));
       break;
     case ProbeSpec::Quantity::reaction:
       // The particle is held: the support balances the body's force on it (a load on a held
       // particle goes straight into the support and is not part of the reaction).
-      sum -= sim.state().force[3 * i + static_cast<std::size_t>(probe.component)] *
-             model.particles.volume[i];
+      sum.add(-sim.state().force[3 * i + static_cast<std::size_t>(probe.component)] *
+              model.particles.volume[i]);
       break;
     case ProbeSpec::Quantity::stress:
-      sum += normal_stress(model, probe.dependant, sim.state().position.data(), i, probe.component);
+      sum.add(
+          normal_stress(model, probe.dependant, sim.state().position.data(), i, probe.component));
       break;
     case ProbeSpec::Quantity::damage:
-      sum += model.state.damage.empty() ? 0.0 : model.state.damage[i];
+      sum.add(model.state.damage.empty() ? 0.0 : model.state.damage[i]);
       break;
     }
   }
-  return probe.quantity == ProbeSpec::Quantity::reaction
-             ? sum
-             : sum / static_cast<double>(probe.particles.size());
+  const double total = model.ownership.communicator().sum(sum);
+  return probe.quantity == ProbeSpec::Quantity::reaction ? total
+                                                         : total / static_cast<double>(probe.count);
 }
 
 void ProbeHistory::record(const std::vector<ResolvedProbe>& probes, const Simulation& sim) {

@@ -14,6 +14,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
 #include <fmt/format.h>
 #include <memory>
 #include <optional>
@@ -58,7 +59,12 @@ private:
       check_checkpoint_target(checkpoint_path(options_), options_.output_dir);
     }
     if (!options_.output_dir.empty()) {
-      folder_.emplace(options_.output_dir, options_.overwrite, !options_.restart.empty());
+      // One folder, claimed once: rank 0 locks it and keeps the manifest; the others write
+      // their VTU pieces and checkpoint files into it once it exists.
+      if (comm().root()) {
+        folder_.emplace(options_.output_dir, options_.overwrite, !options_.restart.empty());
+      }
+      comm().barrier();
     }
   }
 
@@ -106,7 +112,7 @@ private:
 
   void warn(const std::string& warning) {
     out_.warnings.push_back(warning);
-    if (options_.on_warning) {
+    if (options_.on_warning && comm().root()) {
       options_.on_warning(warning);
     }
   }
@@ -134,18 +140,75 @@ private:
     using clock = std::chrono::steady_clock;
     const auto start = clock::now();
     model_ = build_model(scene_);
+    probes_ = resolve_probes(scene_.probes, model_); // on the whole model, before any split
+    out_.particles = model_.size();
+    out_.bonds = model_.family.bond_count();
+    split_over_ranks();
     const auto built = clock::now();
     sim_ = std::make_unique<Simulation>(model_, scene_.solver, scene_.initial);
     out_.model_seconds = std::chrono::duration<double>(built - start).count();
     out_.simulation_seconds = std::chrono::duration<double>(clock::now() - built).count();
-    probes_ = resolve_probes(scene_.probes, model_);
-    out_.particles = model_.size();
-    out_.bonds = model_.family.bond_count();
     output_.emplace(folder_ ? &*folder_ : nullptr, options_, scene_.output, probes_);
     checkpoints_.emplace(options_, sim_->integrator().checkpoint_refusal());
     check_run_size();
     check_time_step();
     check_steady_tolerance();
+  }
+
+  // Split over ranks. Each rank keeps its particles and their halo (discretisation/
+  // distribution.hpp) and the probes' particles it owns; the whole model is then freed.
+  void split_over_ranks() {
+    model_.ownership.comm = &comm();
+    if (comm().size() == 1) {
+      return;
+    }
+    if (scene_.solver.integrator == IntegratorKind::static_solve ||
+        scene_.solver.integrator == IntegratorKind::arkode) {
+      throw std::runtime_error(fmt::format(
+          "solver.integrator: {} does not run on several MPI ranks yet; use damped-euler, "
+          "euler-cromer, verlet or adr, or run with one rank",
+          name_of(scene_.solver.integrator)));
+    }
+    const auto owner = partition_particles(model_, comm(), options_.partition);
+    const PartitionQuality quality = partition_quality(model_, owner, comm().size());
+    model_ = localise(model_, owner, comm().rank(), comm().size(), comm());
+    probes_ = localise_probes(std::move(probes_), model_);
+    Json& d = out_.distribution;
+    d["ranks"] = comm().size();
+    d["partition"] = std::string(name_of(options_.partition));
+    d["cut_bonds"] = quality.cut_bonds;
+    d["owned_particles"] = Json::array_of(quality.owned);
+    d["halo_particles"] = Json::array_of(quality.halo);
+  }
+
+  // Per rank, what the split costs: the model's bytes, the peak resident bytes and the halo
+  // bytes sent per step (gathered on rank 0 for summary.json).
+  void describe_ranks() {
+    if (!out_.distribution.is_object()) {
+      return;
+    }
+    const double steps = std::max<double>(
+        1.0, static_cast<double>(out_.result.steps - out_.restarted_from_step.value_or(0)));
+    const std::string mine = fmt::format("{} {} {}", model_.memory_bytes(), peak_resident_bytes(),
+                                         static_cast<double>(comm().halo_bytes()) / steps);
+    const std::vector<std::string> all = comm().gather(mine);
+    std::vector<double> model_bytes, peak_bytes, halo_bytes;
+    for (const std::string& line : all) {
+      double m = 0, p = 0, h = 0;
+      if (std::sscanf(line.c_str(), "%lf %lf %lf", &m, &p, &h) == 3) {
+        model_bytes.push_back(m);
+        peak_bytes.push_back(p);
+        halo_bytes.push_back(h);
+      }
+    }
+    Json& d = out_.distribution;
+    d["memory_bytes"] = Json::array_of(model_bytes);
+    d["peak_memory_bytes"] = Json::array_of(peak_bytes);
+    d["halo_bytes_per_step"] = Json::array_of(halo_bytes);
+  }
+
+  const Communicator& comm() const {
+    return options_.communicator != nullptr ? *options_.communicator : serial_communicator();
   }
 
   // A force tolerance below the residual's round-off floor can never be met: the run would go on
@@ -205,8 +268,22 @@ private:
     if (options_.restart.empty()) {
       return;
     }
-    CheckpointPolicy::restore(options_.restart, fingerprint(), probes_.size(), *sim_, out_.history,
+    const std::filesystem::path mine = rank_file(options_.restart, comm());
+    if (comm().size() > 1 && !std::filesystem::exists(mine)) {
+      throw CheckpointError(fmt::format(
+          "no checkpoint piece {} for rank {} of {}: a run split over ranks restarts from the "
+          "pieces written with the same rank count",
+          mine.string(), comm().rank(), comm().size()));
+    }
+    CheckpointPolicy::restore(mine, fingerprint(), probes_.size(), *sim_, out_.history,
                               output_->frames());
+    // Every rank's piece must be of the same step (a run killed while the pieces were being
+    // written leaves a mixed set, which must not continue).
+    const auto step = static_cast<double>(sim_->state().step);
+    if (comm().min(step) != comm().max(step)) {
+      throw CheckpointError("the checkpoint pieces are of different steps (the run was stopped "
+                            "while writing them); restart from an earlier set");
+    }
     out_.restarted_from_step = sim_->state().step;
     evaluations_restored_ = sim_->integrator().force_evaluations();
   }
@@ -218,11 +295,13 @@ private:
     if (scene_.output.history_every > 0 && !out_.restarted_from_step) {
       record(*sim_);
     }
-    ProgressLine progress(options_.progress, scene_.solver.end_time.value_or(0.0));
+    ProgressLine progress(options_.progress && comm().root(), scene_.solver.end_time.value_or(0.0));
     out_.result = sim_->run([&](const Simulation& s) {
       after_step(s);
       progress.update(s);
-      return !interrupt.requested() && !failure_seen(s);
+      const bool failed = failure_seen(s); // collective: probes are summed over the ranks
+      // A signal may reach the ranks at different steps; they stop together.
+      return !comm().any(interrupt.requested()) && !failed;
     });
     progress.clear();
     out_.stop_peak = stop_peak_;
@@ -284,7 +363,12 @@ private:
   // A checkpoint: the simulation's state with the run's record so far (history, VTU frames).
   void save_checkpoint(const Simulation& s) {
     if (folder_) {
-      folder_->add(checkpoints_->file());
+      folder_->add(checkpoints_->file()); // rank 0's piece; the other ranks' beside it
+      for (int r = 1; r < comm().size(); ++r) {
+        std::string name = checkpoints_->file().filename().string();
+        name.replace(name.rfind(fmt::format("-r{:04d}of", 0)), 6, fmt::format("-r{:04d}", r));
+        folder_->add(checkpoints_->file().parent_path() / name);
+      }
     }
     checkpoints_->save(fingerprint(), s, out_.history, output_->frames());
     out_.checkpoint = checkpoints_->file();
@@ -324,6 +408,7 @@ private:
 
   // Write the results: summary.json, the last VTU frame and probes.csv (finite rows only).
   void write_results() {
+    describe_ranks();
     out_.summary = run_summary(scene_, *sim_, out_, options_);
     output_->write_final(*sim_, unstable(), out_.history, out_.summary);
   }

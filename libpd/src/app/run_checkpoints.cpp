@@ -82,12 +82,23 @@ void restore_history(CheckpointReader& r, std::size_t columns, ProbeHistory& his
 
 } // namespace
 
-std::filesystem::path checkpoint_path(const RunOptions& options) {
-  if (!options.checkpoint.empty()) {
-    return options.checkpoint;
+std::filesystem::path rank_file(const std::filesystem::path& path, const Communicator& comm) {
+  if (comm.size() == 1 || path.empty()) {
+    return path;
   }
-  return options.output_dir.empty() ? std::filesystem::path{}
-                                    : options.output_dir / "checkpoint.pdcp";
+  std::filesystem::path out = path;
+  out.replace_filename(fmt::format("{}-r{:04d}of{:04d}{}", path.stem().string(), comm.rank(),
+                                   comm.size(), path.extension().string()));
+  return out;
+}
+
+std::filesystem::path checkpoint_path(const RunOptions& options) {
+  const std::filesystem::path base = !options.checkpoint.empty() ? options.checkpoint
+                                     : options.output_dir.empty()
+                                         ? std::filesystem::path{}
+                                         : options.output_dir / "checkpoint.pdcp";
+  return rank_file(base,
+                   options.communicator != nullptr ? *options.communicator : serial_communicator());
 }
 
 CheckpointFingerprint run_fingerprint(const Scene& scene, const Simulation& sim,

@@ -63,6 +63,9 @@ Json run_summary(const Scene& scene, const Simulation& sim, const RunOutcome& ou
     j["residual_floor"] = out.result.residual_floor;
   }
   j["memory_bytes"] = model.memory_bytes();
+  if (out.distribution.is_object()) {
+    j["distribution"] = out.distribution;
+  }
   j["peak_memory_bytes"] = peak_resident_bytes();
   if (Json details = sim.integrator().summary(); details.is_object()) {
     j["integrator_details"] = std::move(details);

@@ -104,9 +104,15 @@ public:
       }
       per_particle[i] = 0.5 * w * volume[i];
     }
-    for (double w : per_particle) {
-      total += w;
+    // Exact, over the owned particles: the same energy for any thread or rank count.
+    const Ownership& own = model_.ownership;
+    ExactSum sum;
+    for (std::size_t i = 0; i < per_particle.size(); ++i) {
+      if (own.owns(i)) {
+        sum.add(per_particle[i]);
+      }
     }
+    total = own.communicator().sum(sum);
     return total;
   }
 

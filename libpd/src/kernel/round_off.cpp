@@ -55,14 +55,14 @@ double residual_round_off_floor(const Model& model, const double* y,
     }
   }
   fold_mirror_bounds(model, deviation.data());
-  double sum = 0;
+  ExactSum sum;
   for (std::size_t d = 0; d < 3 * n; ++d) {
-    if (!held[d]) {
+    if (!held[d] && model.ownership.owns(d / 3)) {
       const double v = model.particles.volume[d / 3] * deviation[d];
-      sum += v * v;
+      sum.add(v * v);
     }
   }
-  return std::sqrt(sum);
+  return std::sqrt(model.ownership.communicator().sum(sum));
 }
 
 } // namespace pd

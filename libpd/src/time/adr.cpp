@@ -32,6 +32,7 @@
 #include "libpd/time/integrator.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <vector>
 
@@ -99,14 +100,16 @@ public:
     const std::size_t ndof = st.position.size();
     const auto& x = model_.particles.position;
 
-    // Damping from the Rayleigh quotient of the local stiffness. Serial sums, in a fixed order,
-    // keep runs bitwise identical for any thread count; they cost O(N) against the O(N·bonds)
-    // force evaluation.
+    // Damping from the Rayleigh quotient of the local stiffness. Exact sums over the owned
+    // particles keep runs bitwise identical for any thread and rank count; they cost O(N)
+    // against the O(N·bonds) force evaluation.
     double c_n = 0;
     if (started_) {
-      double num = 0, den = 0;
+      std::array<ExactSum, 2> sums;
+      auto& [num, den] = sums;
+      const Ownership& own = model_.ownership;
       for (std::size_t d = 0; d < ndof; ++d) {
-        if (constrained_[d]) {
+        if (constrained_[d] || !own.owns(d / 3)) {
           continue;
         }
         const double f = ext != nullptr ? b[d] + load * ext[d] : b[d];
@@ -114,11 +117,12 @@ public:
         const double vel = velocity_[d];
         if (vel != 0) {
           const double k_local = -(f - previous_[d]) / (lambda_[d] * vel); // ¹K_ii, Δt = 1
-          num += u * k_local * u;
+          num.add(u * k_local * u);
         }
-        den += u * u;
+        den.add(u * u);
       }
-      const double q = den > 0 ? num / den : 0.0;
+      own.communicator().sum(sums);
+      const double q = den.value() > 0 ? num.value() / den.value() : 0.0;
       c_n = q > 0 && std::isfinite(q) ? 2.0 * std::sqrt(q) : 0.0;
     }
     last_damping_ = c_n;

@@ -1,6 +1,7 @@
 // The energy bound of a run: kinetic energy against the energy put in.
 #include "libpd/time/energy_watch.hpp"
 
+#include <array>
 #include <cmath>
 #include <fmt/format.h>
 
@@ -9,8 +10,9 @@ namespace pd {
 EnergyWatch::EnergyWatch(const Model& model, const LoadRamp& ramp,
                          const std::vector<std::uint8_t>& massless)
     : model_(model), ramp_(ramp), massless_(massless) {
+  // Each rank watches the work done on its own particles; check() adds them up exactly.
   for (std::size_t d = 0; d < model.external_force_density.size(); ++d) {
-    if (model.external_force_density[d] != 0) {
+    if (model.external_force_density[d] != 0 && model.ownership.owns(d / 3)) {
       loaded_dofs_.push_back(d);
     }
   }
@@ -18,7 +20,7 @@ EnergyWatch::EnergyWatch(const Model& model, const LoadRamp& ramp,
     const Constraint& c = model.constraints[k];
     // A mirror image moves with the body: it does no work on it (under `copy` coupling the
     // constraint can pump energy in, and that is exactly what this watch must catch).
-    if (c.mirror_of == Constraint::no_mirror && c.value != 0) {
+    if (c.mirror_of == Constraint::no_mirror && c.value != 0 && model.ownership.owns(c.particle)) {
       moved_.push_back(k);
     }
   }
@@ -40,22 +42,22 @@ double EnergyWatch::energy_in() const {
 }
 
 double EnergyWatch::kinetic(const State& state, std::size_t& fastest, double& speed) const {
-  double ke = 0;
+  ExactSum ke;
   double top = -1;
   for (std::size_t i = 0; i < model_.size(); ++i) {
-    if (massless_[i]) {
+    if (massless_[i] || !model_.ownership.owns(i)) {
       continue;
     }
     const double* v = &state.velocity[3 * i];
     const double v2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
-    ke += 0.5 * model_.density[i] * model_.particles.volume[i] * v2;
+    ke.add(0.5 * model_.density[i] * model_.particles.volume[i] * v2);
     if (!(v2 <= top)) { // NaN counts as fastest
       top = v2;
       fastest = i;
     }
   }
   speed = std::sqrt(top);
-  return ke;
+  return model_.ownership.communicator().sum(ke);
 }
 
 std::string EnergyWatch::check(const State& state) {
@@ -63,10 +65,11 @@ std::string EnergyWatch::check(const State& state) {
   // R · Δū for supports that move (R = −(b V + F b_ext V), the force the support applies).
   const double f0 = ramp_.factor(previous_time_), f1 = ramp_.factor(state.time);
   const double mean = 0.5 * (f0 + f1);
+  std::array<ExactSum, 2> work; // of the loads, of the moving supports, since the last check
   for (std::size_t k = 0; k < loaded_dofs_.size(); ++k) {
     const std::size_t d = loaded_dofs_[k];
     const double force = mean * model_.external_force_density[d] * model_.particles.volume[d / 3];
-    work_loads_ += force * (state.position[d] - loaded_previous_[k]);
+    work[0].add(force * (state.position[d] - loaded_previous_[k]));
     loaded_previous_[k] = state.position[d];
   }
   for (const std::size_t k : moved_) {
@@ -77,8 +80,11 @@ std::string EnergyWatch::check(const State& state) {
                            ? 0.0
                            : f1 * model_.external_force_density[d] * volume;
     const double reaction = -(state.force[d] * volume + ext);
-    work_supports_ += reaction * c.value * (f1 - f0);
+    work[1].add(reaction * c.value * (f1 - f0));
   }
+  model_.ownership.communicator().sum(work);
+  work_loads_ += work[0].value();
+  work_supports_ += work[1].value();
   previous_time_ = state.time;
 
   std::size_t fastest = 0;
@@ -94,7 +100,7 @@ std::string EnergyWatch::check(const State& state) {
       "loads {:.3g} J, of moving supports {:.3g} J); the fastest particle, #{} at ({:.4g}, "
       "{:.4g}, {:.4g}) m, moves at {:.3g} m/s",
       ke, in > 0 ? fmt::format("{:.3g}×", ke / in) : std::string("more than"), in, initial_,
-      work_loads_, work_supports_, fastest, x[0], x[1], x[2], speed);
+      work_loads_, work_supports_, model_.ownership.global(fastest), x[0], x[1], x[2], speed);
 }
 
 } // namespace pd

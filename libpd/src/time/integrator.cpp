@@ -44,7 +44,8 @@ double kinematic_damping_amplification(const Model& model, double damping, doubl
   if (!(damping > 0) || model.density.empty()) {
     return 1.0;
   }
-  const double rho = *std::max_element(model.density.begin(), model.density.end());
+  const double rho = model.ownership.communicator().max(
+      *std::max_element(model.density.begin(), model.density.end()));
   const double loss = dt * damping / rho / (1.0 + dt * damping / rho); // 1 − ψ
   return std::max(1.0, 0.5 / std::sqrt(loss));
 }
@@ -62,6 +63,14 @@ std::vector<std::uint8_t> held_dofs(const Model& model) {
 
 void apply_constraints(const Model& model, const LoadRamp& ramp, double t, double* position,
                        double* velocity) {
+  // A rank's halo copies take their owners' values first: the dependants below may be set from
+  // them (ownership.hpp).
+  if (const Ownership& own = model.ownership; !own.halo.empty()) {
+    own.communicator().exchange(own.halo, position, 3);
+    if (velocity != nullptr) {
+      own.communicator().exchange(own.halo, velocity, 3);
+    }
+  }
   const double factor = ramp.factor(t);
   const double rate = ramp.rate(t);
   const auto& x = model.particles.position;
@@ -123,7 +132,8 @@ StepReport displacement_report(const Model& m, const double* y) {
     worst = std::max(worst, u2);
   }
   StepReport r;
-  r.max_displacement_squared = finite ? worst : std::numeric_limits<double>::quiet_NaN();
+  r.max_displacement_squared =
+      m.ownership.communicator().max(finite ? worst : std::numeric_limits<double>::quiet_NaN());
   return r;
 }
 

@@ -7,6 +7,7 @@
 #include "libpd/time/energy_watch.hpp"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <fmt/format.h>
@@ -48,7 +49,7 @@ Simulation::Simulation(Model& model, const SolverSpec& solver, const InitialSpec
   // integrator sees the symmetric constrained operator (discretisation/mirror_constraints.hpp).
   forces_ = make_constrained_force_evaluator(model);
   massless_ = massless_dependants(model);
-  dt_stable_ = stable_time_step(model);
+  dt_stable_ = model.ownership.communicator().min(stable_time_step(model));
   IntegratorSettings is;
   is.kind = solver.integrator;
   is.damping = solver.damping;
@@ -65,6 +66,11 @@ Simulation::Simulation(Model& model, const SolverSpec& solver, const InitialSpec
     throw std::runtime_error(
         fmt::format("no usable time step: dt = {} (eq. 31 limit {}); does the model have bonds?",
                     dt_, dt_stable_));
+  }
+  const Communicator& comm = model.ownership.communicator();
+  for (std::size_t r = 0; r < 3; ++r) {
+    lo[r] = comm.min(lo[r]);
+    hi[r] = comm.max(hi[r]);
   }
   const double diagonal =
       std::sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
@@ -87,16 +93,18 @@ void Simulation::perturb(const std::vector<double>& du) {
 }
 
 double Simulation::kinetic_energy() const {
-  double ke = 0;
+  // Exact sums over the owned particles: the same energy on any number of ranks (ownership.hpp).
+  const Ownership& own = model_.ownership;
+  ExactSum ke;
   for (std::size_t i = 0; i < model_.size(); ++i) {
-    if (massless_[i]) { // mirror dependants are images of the body, not mass (W_c's partner T)
+    if (massless_[i] || !own.owns(i)) { // mirror dependants are images of the body, not mass
       continue;
     }
     const double* v = &state_.velocity[3 * i];
-    ke += 0.5 * model_.density[i] * model_.particles.volume[i] *
-          (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+    ke.add(0.5 * model_.density[i] * model_.particles.volume[i] *
+           (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]));
   }
-  return ke;
+  return own.communicator().sum(ke);
 }
 
 double Simulation::strain_energy() const {
@@ -108,32 +116,42 @@ Simulation::ForceBalance Simulation::force_balance() const {
   // reactions, which normalise the residual when no load is applied.
   const double load = ramp_.factor(state_.time);
   const bool has_loads = !model_.external_force_density.empty();
-  double residual = 0, applied = 0, reactions = 0;
+  const Ownership& own = model_.ownership;
+  std::array<ExactSum, 3> sums; // residual, applied, reactions
+  auto& [residual, applied, reactions] = sums;
   for (std::size_t i = 0; i < model_.size(); ++i) {
+    if (!own.owns(i)) {
+      continue;
+    }
     const double vol = model_.particles.volume[i];
     for (std::size_t c = 0; c < 3; ++c) {
       const std::size_t dof = 3 * i + c;
       const double ext = has_loads ? load * model_.external_force_density[dof] * vol : 0.0;
       const double f = state_.force[dof] * vol + ext;
       if (constrained_[dof]) {
-        reactions += f * f;
+        reactions.add(f * f);
       } else {
-        residual += f * f;
+        residual.add(f * f);
       }
-      applied += ext * ext;
+      applied.add(ext * ext);
     }
   }
-  return {std::sqrt(residual), std::sqrt(applied > 0 ? applied : reactions)};
+  own.communicator().sum(sums);
+  const double applied_norm = applied.value();
+  return {std::sqrt(residual.value()),
+          std::sqrt(applied_norm > 0 ? applied_norm : reactions.value())};
 }
 
 double Simulation::full_load_norm() const {
-  double applied = 0;
+  ExactSum applied;
   const std::vector<double>& ext = model_.external_force_density;
   for (std::size_t dof = 0; dof < ext.size(); ++dof) {
-    const double f = ext[dof] * model_.particles.volume[dof / 3];
-    applied += f * f;
+    if (model_.ownership.owns(dof / 3)) {
+      const double f = ext[dof] * model_.particles.volume[dof / 3];
+      applied.add(f * f);
+    }
   }
-  return std::sqrt(applied);
+  return std::sqrt(model_.ownership.communicator().sum(applied));
 }
 
 double Simulation::force_tolerance_for(double reference) const {

@@ -20,9 +20,14 @@ struct ResolvedProbe {
   std::vector<std::uint32_t> particles;
   ProbeSpec::Quantity quantity = ProbeSpec::Quantity::displacement;
   std::vector<std::uint8_t> dependant; ///< stress: the model's massless dependants
+  /// Particles the probe averages over, on all ranks together (particles.size() in one process).
+  std::size_t count = 0;
 };
 
 std::vector<ResolvedProbe> resolve_probes(const std::vector<ProbeSpec>& probes, const Model& model);
+/// The probes of the whole model, resolved by resolve_probes, restricted to the particles
+/// `local` owns (its part of a run split over ranks, discretisation/distribution.hpp).
+std::vector<ResolvedProbe> localise_probes(std::vector<ResolvedProbe> probes, const Model& local);
 double probe_value(const ResolvedProbe& probe, const Simulation& sim);
 
 struct ProbeHistory {

@@ -27,6 +27,9 @@ CheckpointFingerprint run_fingerprint(const Scene& scene, const Simulation& sim,
 /// Default checkpoint path of a run: options.checkpoint, else output_dir/checkpoint.pdcp (empty
 /// if neither is set).
 std::filesystem::path checkpoint_path(const RunOptions& options);
+/// A run split over N > 1 ranks keeps one checkpoint file per rank: NAME-rRRRRofNNNN.EXT beside
+/// the path given (each written atomically; a restart needs the same rank count).
+std::filesystem::path rank_file(const std::filesystem::path& path, const Communicator& comm);
 
 class CheckpointPolicy {
 public:

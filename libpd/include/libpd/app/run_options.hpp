@@ -3,6 +3,9 @@
 // it without depending on the run itself.
 #pragma once
 
+#include "libpd/core/communicator.hpp"
+#include "libpd/discretisation/distribution.hpp"
+
 #include <cstddef>
 #include <filesystem>
 #include <functional>
@@ -35,6 +38,11 @@ struct RunOptions {
   /// Seconds the caller took to read the scene (the lattice of a scene with mirror supports is
   /// generated there), reported with the set-up times; 0 if unknown.
   double scene_seconds = 0;
+  /// The ranks the run is split over (core/communicator.hpp); null: one process. Every rank
+  /// calls run_scene with the same scene and options; rank 0 writes probes.csv, summary.json and
+  /// the .pvtu files, every rank its VTU piece and its checkpoint file.
+  const Communicator* communicator = nullptr;
+  PartitionMethod partition = PartitionMethod::rcb;
 };
 
 } // namespace pd

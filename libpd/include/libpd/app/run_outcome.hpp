@@ -26,6 +26,10 @@ struct RunOutcome {
       0; ///< Simulation: force evaluator, stable Δt, the integrator's set-up
   std::size_t particles = 0;
   std::size_t bonds = 0;
+  /// A run split over ranks: ranks, partition, and per rank the particles owned, the halo
+  /// copies, the model's bytes, the peak resident bytes and the halo bytes sent per step
+  /// (summary.json `distribution`; null in one process).
+  Json distribution;
   std::map<std::string, double> probes;
   ProbeHistory history;
   Json summary;

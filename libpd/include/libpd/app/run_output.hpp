@@ -50,7 +50,8 @@ private:
   void write_frame(const Simulation& sim);
   void write(const std::string& name, const std::string& content);
 
-  OutputFolder* folder_;
+  OutputFolder* folder_; ///< rank 0's; null on the other ranks
+  const Communicator& comm_;
   std::filesystem::path dir_;
   bool vtu_ = false;
   std::size_t vtu_every_ = 0;

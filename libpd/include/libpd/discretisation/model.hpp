@@ -9,6 +9,7 @@
 #include "libpd/discretisation/ghost_layers.hpp"
 #include "libpd/discretisation/lattice.hpp"
 #include "libpd/discretisation/mirror_constraints.hpp"
+#include "libpd/discretisation/ownership.hpp"
 #include "libpd/physics/effects.hpp"
 #include "libpd/physics/material.hpp"
 
@@ -142,6 +143,9 @@ struct Model {
   std::vector<double> external_force_density; ///< 3N, full (unramped) load [N/m³]
   /// Per crack of spec.cracks: the bonds (pairs) it kept from being created.
   std::vector<std::size_t> bonds_cut_by_crack;
+  /// The particles this process owns when the run is split over MPI ranks (ownership.hpp);
+  /// a serial model owns all of them.
+  Ownership ownership;
 
   std::size_t size() const { return particles.size(); }
   std::size_t body_particle_count() const { return particles.size() - ghost_count; }

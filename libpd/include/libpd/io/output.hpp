@@ -21,6 +21,11 @@ namespace pd {
 
 /// ParaView-readable VTU of the particles with displacement, velocity and (if present) damage as
 /// point data. Throws if any value is not finite.
+/// A run split over ranks writes the particles each rank owns; every file carries `global_id`,
+/// the particle's index in the whole model, so that pieces join.
 void write_vtu(const std::filesystem::path& path, const Simulation& sim);
+
+/// The .pvtu file that joins VTU pieces written by write_vtu (file names relative to it).
+std::string pvtu_text(const std::vector<std::string>& pieces, bool damage);
 
 } // namespace pd

@@ -1,0 +1,144 @@
+#!/usr/bin/python3
+"""Runs split over MPI ranks give the same bits as one process.
+
+    mpi_test.py ranks PD MPIEXEC SCENE WORKDIR N1,N2,...
+        run SCENE on each rank count and compare every run with the first (compare_runs.py):
+        summary numbers, probes.csv and every VTU frame joined on global_id.
+    mpi_test.py kill-restart PD MPIEXEC SCENE WORKDIR N
+        on N ranks: run A uninterrupted; run B killed with SIGKILL (the whole process group,
+        mpiexec and every rank) between two checkpoints, then restarted from its checkpoint
+        pieces; A and B must be identical, and so must their checkpoint pieces, byte for byte.
+
+MPIEXEC may carry options ("mpiexec --oversubscribe"); as root, --allow-run-as-root is added.
+"""
+import os
+import shlex
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+
+
+def fail(msg):
+    print(f"FAIL: {msg}")
+    sys.exit(1)
+
+
+def launcher(mpiexec, n):
+    cmd = shlex.split(mpiexec)
+    if os.geteuid() == 0:
+        cmd.append("--allow-run-as-root")
+    return [*cmd, "-np", str(n)]
+
+
+def pd_run(pd, mpiexec, n, scene, out, extra=()):
+    cmd = [*launcher(mpiexec, n), pd, "run", scene, "-o", str(out), "--threads", "1", *extra]
+    p = subprocess.run(cmd, capture_output=True, text=True, timeout=600,
+                       env=dict(os.environ, OMP_NUM_THREADS="1"))
+    if p.returncode != 0:
+        fail(f"{' '.join(cmd)} exited with {p.returncode}:\n{p.stdout}\n{p.stderr}")
+    return p.stdout
+
+
+def compare(a, b):
+    p = subprocess.run([sys.executable, str(HERE / "compare_runs.py"), str(a), str(b)],
+                       capture_output=True, text=True)
+    print(p.stdout.strip())
+    if p.returncode != 0:
+        fail(f"{a} and {b} differ")
+
+
+def ranks(pd, mpiexec, scene, work, counts):
+    runs = []
+    for n in counts:
+        out = work / f"np{n}"
+        t0 = time.monotonic()
+        pd_run(pd, mpiexec, n, scene, out)
+        print(f"{n} rank(s): {time.monotonic() - t0:.1f} s")
+        runs.append(out)
+    for other in runs[1:]:
+        compare(runs[0], other)
+
+
+def descendants(pid):
+    """pid and every process below it (mpiexec puts its ranks in process groups of their own)."""
+    out, todo = [], [pid]
+    while todo:
+        p = todo.pop()
+        out.append(p)
+        try:
+            children = Path(f"/proc/{p}/task/{p}/children").read_text().split()
+        except OSError:
+            children = []
+        todo.extend(int(c) for c in children)
+    return out
+
+
+def kill_all(pid):
+    for p in descendants(pid):
+        try:
+            os.kill(p, signal.SIGKILL)
+        except ProcessLookupError:
+            pass
+
+
+def kill_restart(pd, mpiexec, scene, work, n):
+    every, kill_frame = "100", "particles-00000150.pvtu"
+    a, b = work / "a", work / "b"
+    pd_run(pd, mpiexec, n, scene, a, ["--checkpoint-every", every])
+    cmd = [*launcher(mpiexec, n), pd, "run", scene, "-o", str(b), "--threads", "1",
+           "--checkpoint-every", every]
+    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                            start_new_session=True, env=dict(os.environ, OMP_NUM_THREADS="1"))
+    deadline = time.monotonic() + 300
+    while not (b / kill_frame).exists():
+        if proc.poll() is not None:
+            fail(f"run B ended (exit {proc.returncode}) before {kill_frame} appeared:\n"
+                 f"{proc.stderr.read()}")
+        if time.monotonic() > deadline:
+            kill_all(proc.pid)
+            fail(f"{kill_frame} did not appear")
+        time.sleep(0.002)
+    kill_all(proc.pid)  # mpiexec and every rank, no chance to clean up
+    proc.wait()
+    time.sleep(0.5)  # the ranks' lock on the folder dies with them
+    if (b / "summary.json").exists():
+        fail("run B finished before the kill: make the scene longer")
+    pieces = sorted(p.name for p in b.glob("checkpoint-r*of*.pdcp"))
+    if len(pieces) != n:
+        fail(f"expected {n} checkpoint pieces after the kill, found {pieces}")
+    restart = pd_run(pd, mpiexec, n, scene, b, ["--checkpoint-every", every, "--restart",
+                                                str(b / "checkpoint.pdcp")])
+    first = restart.splitlines()[0]
+    print(first)
+    step = int(first.rsplit(" ", 1)[1])
+    if step >= 297 or step % int(every) != 0:
+        fail(f"the restart should start from a checkpoint before the end: {first}")
+    compare(a, b)
+    for piece in pieces:
+        if (a / piece).read_bytes() != (b / piece).read_bytes():
+            fail(f"checkpoint piece {piece} differs")
+    print(f"checkpoint pieces identical: {', '.join(pieces)}")
+
+
+def main():
+    if len(sys.argv) != 7:
+        fail(__doc__)
+    mode, pd, mpiexec, scene, work, counts = sys.argv[1:]
+    work = Path(work)
+    subprocess.run(["rm", "-rf", str(work)], check=True)
+    work.mkdir(parents=True)
+    if mode == "ranks":
+        ranks(pd, mpiexec, scene, work, [int(c) for c in counts.split(",")])
+    elif mode == "kill-restart":
+        kill_restart(pd, mpiexec, scene, work, int(counts))
+    else:
+        fail(f"unknown mode {mode}")
+    print("PASS")
+
+
+if __name__ == "__main__":
+    main()
