@@ -10,6 +10,7 @@ Stages (each cached under DIR/cache/ by a hash of its inputs; see reports/README
                proves the current pd-fem still reproduces them (--full: the full pd-fem run).
   verify:*     `pd verify CASE` for every case of `pd verify --list`.
   scene:*      `pd verify SCENE.yaml --fe-coarse` for every elastic scene of verification/scenes/user/.
+  mpi          reports/mpi/scaling.py: Model C on 1, 2 and 4 MPI ranks (speed-up, memory, halo).
   sweep:*      `pd verify --sweep CASE` (accuracy vs time).
   stability    `pd stability SCENE... --json`.
   compare:*    `pd compare dynamic|quasistatic -o FILE.jsonl`.
@@ -101,6 +102,7 @@ def build_stages(ctx: S.Ctx, records: dict[str, dict]) -> list[S.Stage]:
     stages.append(S.stability_stage(ctx, FULL_STABILITY_SCENES if ctx.full else DEFAULT_STABILITY_SCENES))
     stages += [S.compare_stage(ctx, "dynamic"), S.compare_stage(ctx, "quasistatic")]
     stages += [S.bench_stage(ctx), S.kernel_stage(ctx), S.peer_stage(ctx), S.lammps_stage(ctx)]
+    stages.append(S.mpi_stage(ctx))
     return stages
 
 

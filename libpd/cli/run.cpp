@@ -153,8 +153,9 @@ Command add_run_command(CLI::App& app) {
       ->check(CLI::Validator(
           [](const std::string& path) {
             const auto mine = rank_file(path, world_communicator());
-            return std::filesystem::is_regular_file(mine) ? std::string{}
-                                                          : "File does not exist: " + mine.string();
+            // Only that it exists: what kind of file it is, the checkpoint reader says.
+            return std::filesystem::exists(mine) ? std::string{}
+                                                 : "File does not exist: " + mine.string();
           },
           "FILE"));
   return {cmd, [a] { return run(*a); }};

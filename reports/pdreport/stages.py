@@ -595,6 +595,29 @@ def peer_stage(ctx: Ctx) -> Stage:
                  [ctx.pd, scene, inp] + ([Path(lmp)] if lmp else []), fn, default_seconds=60)
 
 
+def mpi_stage(ctx: Ctx) -> Stage:
+    """Strong scaling on Model C over 1, 2 and 4 MPI ranks (reports/mpi/scaling.py), and the
+    bitwise-equality of their probes and energies."""
+    script = ctx.root / "reports" / "mpi" / "scaling.py"
+    scene = ctx.root / "reports" / "mpi" / "model-c-scaling.yaml"
+    mpiexec = shutil.which("mpiexec")
+    cmd = ["/usr/bin/python3", str(script), str(ctx.pd), "--rounds", "3" if ctx.full else "1",
+           "--scene", str(scene), "--work", str(ctx.work / "mpi"), "--json"]
+
+    def fn(ctx: Ctx, st: Stage) -> dict:
+        if not mpiexec:
+            raise StageFailed("mpiexec is not installed: apt-get install openmpi-bin")
+        p = run(ctx, cmd, "mpi-scaling")
+        j = parse_json_output(p.stdout)
+        if not isinstance(j, dict) or "per_ranks" not in j:
+            raise StageFailed("reports/mpi/scaling.py printed no scaling record")
+        j["loadavg"] = _loadavg()
+        return j
+
+    return Stage("mpi", "mpi", "MPI strong scaling on Model C (1, 2, 4 ranks)", [cmd],
+                 [ctx.pd, script, scene], fn, default_seconds=200 if ctx.full else 80)
+
+
 def _loadavg() -> str:
     try:
         return Path("/proc/loadavg").read_text().split(" ")[0:3].__str__()

@@ -162,12 +162,16 @@ private:
     if (comm().size() == 1) {
       return;
     }
+    // Fixed-step ARKode only combines vectors, entry by entry: each rank's stages are the serial
+    // ones on its particles. Adaptive steps take norms of the whole state (not split yet), and
+    // the static solver factors the whole matrix.
     if (scene_.solver.integrator == IntegratorKind::static_solve ||
-        scene_.solver.integrator == IntegratorKind::arkode) {
+        (scene_.solver.integrator == IntegratorKind::arkode && scene_.solver.arkode.adaptive)) {
       throw std::runtime_error(fmt::format(
-          "solver.integrator: {} does not run on several MPI ranks yet; use damped-euler, "
-          "euler-cromer, verlet or adr, or run with one rank",
-          name_of(scene_.solver.integrator)));
+          "solver.integrator: {}{} does not run on several MPI ranks yet; use damped-euler, "
+          "euler-cromer, verlet, adr or fixed-step arkode, or run with one rank",
+          name_of(scene_.solver.integrator),
+          scene_.solver.arkode.adaptive ? " (adaptive)" : ""));
     }
     const auto owner = partition_particles(model_, comm(), options_.partition);
     const PartitionQuality quality = partition_quality(model_, owner, comm().size());

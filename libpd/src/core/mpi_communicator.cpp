@@ -62,8 +62,8 @@ public:
     }
   }
 
-  double max(double x) const override { return extremum(x, MPI_MAX); }
-  double min(double x) const override { return extremum(x, MPI_MIN); }
+  double max(double x) const override { return extremum(x, true); }
+  double min(double x) const override { return extremum(x, false); }
 
   std::uint64_t sum(std::uint64_t x) const override {
     check(MPI_Allreduce(MPI_IN_PLACE, &x, 1, MPI_UINT64_T, MPI_SUM, comm_), "MPI_Allreduce");
@@ -153,15 +153,15 @@ public:
   const void* native() const override { return &comm_; }
 
 private:
-  double extremum(double x, MPI_Op op) const {
-    // MPI_MAX/MIN on NaN is implementation-defined: reduce a NaN flag separately.
-    int nan = std::isnan(x) ? 1 : 0;
-    check(MPI_Allreduce(MPI_IN_PLACE, &nan, 1, MPI_INT, MPI_MAX, comm_), "MPI_Allreduce");
-    if (nan != 0) {
+  /// One allreduce: MPI_MAX over {NaN flag, ±x} (the minimum as the maximum of −x), since
+  /// MPI_MAX/MIN on NaN is implementation-defined.
+  double extremum(double x, bool maximum) const {
+    double pair[2] = {std::isnan(x) ? 1.0 : 0.0, std::isnan(x) ? 0.0 : (maximum ? x : -x)};
+    check(MPI_Allreduce(MPI_IN_PLACE, pair, 2, MPI_DOUBLE, MPI_MAX, comm_), "MPI_Allreduce");
+    if (pair[0] != 0) {
       return std::numeric_limits<double>::quiet_NaN();
     }
-    check(MPI_Allreduce(MPI_IN_PLACE, &x, 1, MPI_DOUBLE, op, comm_), "MPI_Allreduce");
-    return x;
+    return maximum ? pair[1] : -pair[1];
   }
 
   static constexpr int exchange_tag = 7301;
