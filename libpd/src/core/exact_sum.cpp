@@ -1,5 +1,6 @@
 #include "libpd/core/exact_sum.hpp"
 
+#include <bit>
 #include <cmath>
 #include <cstdlib>
 
@@ -14,27 +15,26 @@ constexpr std::uint32_t adds_before_normalise = 1U << 30U;
 } // namespace
 
 void ExactSum::add(double x) {
-  if (x == 0) {
-    return;
-  }
-  if (!std::isfinite(x)) {
+  // |x| = significand · 2^(position − exponent_offset), read from the bits (frexp and ldexp
+  // cost 5× the rest of add()): a normal number's biased exponent e gives the implicit leading
+  // bit and position e + 52, a subnormal's (e = 0) position 53. Zero adds zeros.
+  const auto bits = std::bit_cast<std::uint64_t>(x);
+  const auto biased = static_cast<int>((bits >> 52U) & 0x7FFU);
+  if (biased == 0x7FF) { // ±inf or NaN
     non_finite_ += x;
     return;
   }
-  int exponent = 0;
-  const double fraction = std::frexp(std::abs(x), &exponent); // |x| = fraction · 2^exponent
-  // The 53-bit significand as an integer: |x| = significand · 2^(exponent − 53), exact.
-  const auto significand = static_cast<std::int64_t>(std::ldexp(fraction, 53));
-  const int position = exponent - 53 + exponent_offset; // bit of the significand's lowest bit
-  const int limb = position / limb_bits;
+  const std::uint64_t fraction = bits & ((std::uint64_t{1} << 52U) - 1);
+  const std::uint64_t significand = biased == 0 ? fraction : fraction | (std::uint64_t{1} << 52U);
+  const int position = (biased == 0 ? 1 : biased) + 52; // exponent_offset − 1075 = 52
+  const auto at = static_cast<std::size_t>(position / limb_bits);
   const int shift = position % limb_bits;
   // significand · 2^shift < 2^85 in three 32-bit pieces, from its low and high words.
-  const auto low = static_cast<std::uint64_t>(significand) & limb_mask;
-  const auto high = static_cast<std::uint64_t>(significand) >> limb_bits;
+  const std::uint64_t low = significand & static_cast<std::uint64_t>(limb_mask);
+  const std::uint64_t high = significand >> limb_bits;
   const std::uint64_t low_shifted = low << shift;                           // < 2^63
   const std::uint64_t upper = (high << shift) + (low_shifted >> limb_bits); // < 2^54
-  const std::int64_t sign = x < 0 ? -1 : 1;
-  const auto at = static_cast<std::size_t>(limb);
+  const std::int64_t sign = 1 - 2 * static_cast<std::int64_t>(bits >> 63U); // no branch
   limb_[at] += sign * static_cast<std::int64_t>(low_shifted & limb_mask);
   limb_[at + 1] += sign * static_cast<std::int64_t>(upper & limb_mask);
   limb_[at + 2] += sign * static_cast<std::int64_t>(upper >> limb_bits);

@@ -100,26 +100,35 @@ public:
     const std::size_t ndof = st.position.size();
     const auto& x = model_.particles.position;
 
-    // Damping from the Rayleigh quotient of the local stiffness. Exact sums over the owned
-    // particles keep runs bitwise identical for any thread and rank count; they cost O(N)
-    // against the O(N·bonds) force evaluation.
+    // Damping from the Rayleigh quotient of the local stiffness. Each particle's three terms
+    // are added in a fixed order, then the particles' sums exactly over the owned particles:
+    // bitwise the same for any thread and rank count, at one exact addition per particle and
+    // sum against the O(N·bonds) force evaluation.
     double c_n = 0;
     if (started_) {
       std::array<ExactSum, 2> sums;
       auto& [num, den] = sums;
       const Ownership& own = model_.ownership;
-      for (std::size_t d = 0; d < ndof; ++d) {
-        if (constrained_[d] || !own.owns(d / 3)) {
+      for (std::size_t i = 0; i < ndof / 3; ++i) {
+        if (!own.owns(i)) {
           continue;
         }
-        const double f = ext != nullptr ? b[d] + load * ext[d] : b[d];
-        const double u = y[d] - x[d / 3][d % 3];
-        const double vel = velocity_[d];
-        if (vel != 0) {
-          const double k_local = -(f - previous_[d]) / (lambda_[d] * vel); // ¹K_ii, Δt = 1
-          num.add(u * k_local * u);
+        double particle_num = 0, particle_den = 0;
+        for (std::size_t d = 3 * i; d < 3 * i + 3; ++d) {
+          if (constrained_[d]) {
+            continue;
+          }
+          const double f = ext != nullptr ? b[d] + load * ext[d] : b[d];
+          const double u = y[d] - x[i][d % 3];
+          const double vel = velocity_[d];
+          if (vel != 0) {
+            const double k_local = -(f - previous_[d]) / (lambda_[d] * vel); // ¹K_ii, Δt = 1
+            particle_num += u * k_local * u;
+          }
+          particle_den += u * u;
         }
-        den.add(u * u);
+        num.add(particle_num);
+        den.add(particle_den);
       }
       own.communicator().sum(sums);
       const double q = den.value() > 0 ? num.value() / den.value() : 0.0;

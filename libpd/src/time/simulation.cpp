@@ -124,17 +124,17 @@ Simulation::ForceBalance Simulation::force_balance() const {
       continue;
     }
     const double vol = model_.particles.volume[i];
+    double particle[3] = {0, 0, 0}; // a particle's terms in a fixed order, then one exact add
     for (std::size_t c = 0; c < 3; ++c) {
       const std::size_t dof = 3 * i + c;
       const double ext = has_loads ? load * model_.external_force_density[dof] * vol : 0.0;
       const double f = state_.force[dof] * vol + ext;
-      if (constrained_[dof]) {
-        reactions.add(f * f);
-      } else {
-        residual.add(f * f);
-      }
-      applied.add(ext * ext);
+      particle[constrained_[dof] ? 2 : 0] += f * f;
+      particle[1] += ext * ext;
     }
+    residual.add(particle[0]);
+    applied.add(particle[1]);
+    reactions.add(particle[2]);
   }
   own.communicator().sum(sums);
   const double applied_norm = applied.value();
