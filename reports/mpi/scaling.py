@@ -95,6 +95,7 @@ def main() -> int:
             "memory_bytes": d.get("memory_bytes", [last["memory_bytes"]]),
             "peak_memory_bytes": d.get("peak_memory_bytes", [last["peak_memory_bytes"]]),
             "halo_bytes_per_step": d.get("halo_bytes_per_step", [0]),
+            "halo_exchange_seconds": d.get("halo_exchange_seconds", [0]),
         })
     record = {"scene": str(Path(a.scene).resolve().relative_to(ROOT)),
               "particles": first["particles"], "bonds": first["bonds"], "steps": first["steps"],
@@ -106,14 +107,16 @@ def main() -> int:
               f"{record['steps']} steps; probes and energies identical across rank counts: "
               f"{identical}")
         print("ranks | median solve [s] | speed-up | loads | owned per rank | halo per rank | "
-              "model MiB per rank | peak MiB per rank | halo KiB/step per rank")
+              "model MiB per rank | peak MiB per rank | halo KiB/step per rank | "
+              "exchange s per rank")
         for c in per_count:
             print(f"{c['ranks']} | {c['median_solve_seconds']:.2f} | {c['speedup']:.2f} | "
                   f"{', '.join(f'{x:.1f}' for x in c['load_before'])} | {c['owned_particles']} | "
                   f"{c['halo_particles']} | "
                   f"{[round(b / 2**20) for b in c['memory_bytes']]} | "
                   f"{[round(b / 2**20) for b in c['peak_memory_bytes']]} | "
-                  f"{[round(b / 1024, 1) for b in c['halo_bytes_per_step']]}")
+                  f"{[round(b / 1024, 1) for b in c['halo_bytes_per_step']]} | "
+                  f"{[round(s, 3) for s in c['halo_exchange_seconds']]}")
     return 0 if identical else 1
 
 

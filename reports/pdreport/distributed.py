@@ -44,10 +44,12 @@ def section(page: Page) -> str:
                      esc(" / ".join(fnum(x) for x in c["halo_particles"])),
                      esc(" / ".join(f"{x / MIB:.0f}" for x in c["memory_bytes"])),
                      esc(" / ".join(f"{x / MIB:.0f}" for x in c["peak_memory_bytes"])),
-                     esc(" / ".join(f"{x / 1024:.0f}" for x in c["halo_bytes_per_step"]))])
+                     esc(" / ".join(f"{x / 1024:.0f}" for x in c["halo_bytes_per_step"])),
+                     esc(" / ".join(f"{x:.3f}" for x in c.get("halo_exchange_seconds", [])))])
     out.append(table(["ranks", "median solve (s)", "speed-up", "load before each run",
                       "set-up (s)", "particles per rank", "halo per rank", "model MiB per rank",
-                      "peak MiB per rank", "halo KiB sent per step, per rank"],
+                      "peak MiB per rank", "halo KiB sent per step, per rank",
+                      "time in the exchange (s), per rank"],
                      rows, 'id="mpi-table"'))
     out.append('<p class="note">Model MiB is what a rank keeps for the run (its particles, halo '
                'and bond rows). The peak is set up: every rank still builds the whole model before '

@@ -170,8 +170,7 @@ private:
       throw std::runtime_error(fmt::format(
           "solver.integrator: {}{} does not run on several MPI ranks yet; use damped-euler, "
           "euler-cromer, verlet, adr or fixed-step arkode, or run with one rank",
-          name_of(scene_.solver.integrator),
-          scene_.solver.arkode.adaptive ? " (adaptive)" : ""));
+          name_of(scene_.solver.integrator), scene_.solver.arkode.adaptive ? " (adaptive)" : ""));
     }
     const auto owner = partition_particles(model_, comm(), options_.partition);
     const PartitionQuality quality = partition_quality(model_, owner, comm().size());
@@ -193,22 +192,25 @@ private:
     }
     const double steps = std::max<double>(
         1.0, static_cast<double>(out_.result.steps - out_.restarted_from_step.value_or(0)));
-    const std::string mine = fmt::format("{} {} {}", model_.memory_bytes(), peak_resident_bytes(),
-                                         static_cast<double>(comm().halo_bytes()) / steps);
+    const std::string mine =
+        fmt::format("{} {} {} {}", model_.memory_bytes(), peak_resident_bytes(),
+                    static_cast<double>(comm().halo_bytes()) / steps, comm().halo_seconds());
     const std::vector<std::string> all = comm().gather(mine);
-    std::vector<double> model_bytes, peak_bytes, halo_bytes;
+    std::vector<double> model_bytes, peak_bytes, halo_bytes, halo_seconds;
     for (const std::string& line : all) {
-      double m = 0, p = 0, h = 0;
-      if (std::sscanf(line.c_str(), "%lf %lf %lf", &m, &p, &h) == 3) {
+      double m = 0, p = 0, h = 0, s = 0;
+      if (std::sscanf(line.c_str(), "%lf %lf %lf %lf", &m, &p, &h, &s) == 4) {
         model_bytes.push_back(m);
         peak_bytes.push_back(p);
         halo_bytes.push_back(h);
+        halo_seconds.push_back(s);
       }
     }
     Json& d = out_.distribution;
     d["memory_bytes"] = Json::array_of(model_bytes);
     d["peak_memory_bytes"] = Json::array_of(peak_bytes);
     d["halo_bytes_per_step"] = Json::array_of(halo_bytes);
+    d["halo_exchange_seconds"] = Json::array_of(halo_seconds);
   }
 
   const Communicator& comm() const {

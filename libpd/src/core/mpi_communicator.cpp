@@ -3,6 +3,7 @@
 #include "libpd/core/communicator.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <limits>
@@ -80,6 +81,7 @@ public:
     if (plan.empty()) {
       return;
     }
+    const auto start = std::chrono::steady_clock::now();
     const std::size_t peers = plan.peers.size();
     send_.resize(peers);
     receive_.resize(peers);
@@ -113,6 +115,8 @@ public:
                     values + width * peer.receive[e]);
       }
     }
+    halo_seconds_ +=
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   }
 
   std::vector<std::string> gather(const std::string& bytes) const override {

@@ -58,8 +58,10 @@ public:
   /// Copy `width` values per entry from each entry's owner into the halo copies of the plan.
   /// Counts the bytes sent (halo_bytes()).
   virtual void exchange(const HaloPlan& plan, double* values, std::size_t width) const = 0;
-  /// Bytes this rank has sent in exchange() so far.
+  /// Bytes this rank has sent in exchange() so far, and the seconds it spent there (packing,
+  /// waiting and unpacking: what overlapping the exchange with the force loop could hide).
   std::uint64_t halo_bytes() const { return halo_bytes_; }
+  double halo_seconds() const { return halo_seconds_; }
 
   /// Every rank's bytes, concatenated in rank order, on the root (empty elsewhere).
   virtual std::vector<std::string> gather(const std::string& bytes) const = 0;
@@ -73,6 +75,7 @@ public:
 
 protected:
   mutable std::uint64_t halo_bytes_ = 0;
+  mutable double halo_seconds_ = 0;
 };
 
 /// The one-process communicator.
