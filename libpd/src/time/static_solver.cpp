@@ -118,7 +118,10 @@ private:
     }
     const Eigen::VectorXd rhs = Eigen::Map<const Eigen::VectorXd>(system.rhs.data(), n);
     const Eigen::SparseMatrix<double> K = column_major(std::move(system), symmetric);
-    const std::unique_ptr<SparseFactorisation> factor = factorise(K, symmetric);
+    std::vector<std::size_t> particle(d.free_dofs.size()); // a particle's unknowns order together
+    std::transform(d.free_dofs.begin(), d.free_dofs.end(), particle.begin(),
+                   [](std::size_t g) { return g / 3; });
+    const std::unique_ptr<SparseFactorisation> factor = factorise(K, symmetric, particle);
     const auto t2 = clock::now();
 
     // Linear solution, then Newton on the force kernel's residual.
