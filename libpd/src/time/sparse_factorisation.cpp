@@ -16,6 +16,7 @@
 #include <Eigen/UmfPackSupport>
 #include <algorithm>
 #include <cholmod.h>
+#include <chrono>
 #endif
 
 namespace pd {
@@ -119,6 +120,7 @@ public:
     cholmod_start(&common_);
     common_.supernodal = CHOLMOD_SUPERNODAL;
     common_.final_asis = 1;
+    const auto start = std::chrono::steady_clock::now();
     cholmod_sparse A = view(K);
     std::vector<int> order = group_ordering(K, group, common_, ordering_);
     if (!order.empty()) {
@@ -130,6 +132,8 @@ public:
     if (factor_ == nullptr) {
       singular("the analysis of the Cholesky factorisation (CHOLMOD)");
     }
+    analysis_seconds_ =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     // The symbolic analysis knows the factor's size: refuse a factor the machine cannot hold
     // before the numeric factorisation runs into the OOM killer.
     check_fits(static_cast<double>(factor_bytes()));
@@ -160,6 +164,7 @@ public:
     cholmod_free_dense(&x, &common_);
     return out;
   }
+  double analysis_seconds() const override { return analysis_seconds_; }
   std::string name() const override {
     switch (ordering_) {
     case CHOLMOD_AMD:
@@ -205,6 +210,7 @@ private:
 
   mutable cholmod_common common_{};
   cholmod_factor* factor_ = nullptr;
+  double analysis_seconds_ = 0;
   int ordering_ = -1; ///< CHOLMOD's ordering method of the particles (-1: CHOLMOD's own of K)
 };
 

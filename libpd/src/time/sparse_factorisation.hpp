@@ -29,6 +29,9 @@ public:
   virtual std::size_t factor_nonzeros() const = 0;
   /// Bytes of the factor's values and indices.
   virtual std::size_t factor_bytes() const = 0;
+  /// Seconds the ordering and symbolic analysis took, where they run apart from the numeric
+  /// factorisation (CHOLMOD); 0 otherwise.
+  virtual double analysis_seconds() const { return 0.0; }
 };
 
 /// Factor K (square, compressed, column-major). `symmetric`: K = Kᵀ (to round-off; only its lower
