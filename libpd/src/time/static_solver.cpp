@@ -236,6 +236,7 @@ private:
     };
     // CG to a relative residual of 1e-3 (Newton stays quadratic down to that factor per step).
     Eigen::VectorXd x = Eigen::VectorXd::Zero(n), res = r, z = factor.solve(res), p = z;
+    const Eigen::VectorXd modified = z; // the modified Newton step K⁻¹ r
     double rz = res.dot(z);
     const double stop = 1e-3 * r.norm();
     for (std::size_t it = 0; it < max_cg_iterations && res.norm() > stop; ++it) {
@@ -247,12 +248,15 @@ private:
       const double alpha = rz / pq;
       x += alpha * p;
       res -= alpha * q;
+      if (res.norm() <= stop) {
+        break; // converged: the next direction (one more solve with the factor) is not needed
+      }
       z = factor.solve(res);
       const double rz_next = res.dot(z);
       p = z + (rz_next / rz) * p;
       rz = rz_next;
     }
-    return x.isZero() ? factor.solve(r) : x;
+    return x.isZero() ? modified : x;
   }
 
   static constexpr std::size_t max_cg_iterations = 50;
