@@ -9,9 +9,10 @@
 //   mirror dependant          u_d = σ u_m: its column folds onto the master's (copy coupling:
 //                             K_ff + K_fd R), and under consistent coupling its row folds too,
 //                             weighted σ V_d / V_m, as fold_mirror_forces does (Rᵀ K R).
-// K is assembled once and factored (time/sparse_factorisation.hpp: CHOLMOD's supernodal
-// Cholesky when it is symmetric, an LU factorisation otherwise). Then Newton on the real force
-// kernel, r = b(y) + b_ext on the free dofs, until ‖r‖ ≤ tolerance ‖b_ext‖: each step solves
+// K is assembled once, in particle blocks (time/static_assembly.hpp), and factored
+// (time/sparse_factorisation.hpp: CHOLMOD's supernodal Cholesky when it is symmetric, an LU
+// factorisation otherwise). Then Newton on the real force kernel, r = b(y) + b_ext on the free
+// dofs, until ‖r‖ ≤ tolerance ‖b_ext‖ (or the residual's round-off floor): each step solves
 // J δ = r by conjugate gradients preconditioned with the factor, J the kernel's own tangent by
 // finite differences (modified Newton, δ = K⁻¹ r, when K is not symmetric). For finite stretch
 // this converges to the nonlinear equilibrium that dynamic relaxation finds, and a wrong assembly
