@@ -10,10 +10,13 @@
 #include <optional>
 #include <stdexcept>
 #include <string_view>
+#include <vector>
 
 #ifdef LIBPD_HAVE_SUITESPARSE
-#include <Eigen/CholmodSupport>
 #include <Eigen/UmfPackSupport>
+#include <algorithm>
+#include <cholmod.h>
+#include <chrono>
 #endif
 
 namespace pd {
@@ -22,8 +25,17 @@ namespace {
 
 using SparseMatrix = Eigen::SparseMatrix<double>;
 
+[[noreturn]] void singular(std::string_view what) {
+  throw std::runtime_error(std::string("static solve: ") + std::string(what) +
+                           " failed: the stiffness matrix is singular (is the body held against "
+                           "rigid motion by its supports?)");
+}
+
+#ifdef LIBPD_HAVE_SUITESPARSE
+
 /// Throws when a factor of `bytes` would not fit into the memory the run may use (with room for
-/// the matrix and the solver's workspace: 80 %).
+/// the matrix and the solver's workspace: 80 %). Only CHOLMOD's analysis tells the size before
+/// the factorisation, hence only with SuiteSparse.
 void check_fits(double bytes) {
   const std::optional<MemoryBudget> budget = available_memory();
   if (budget && bytes > 0.8 * budget->bytes) {
@@ -35,53 +47,173 @@ void check_fits(double bytes) {
   }
 }
 
-[[noreturn]] void singular(std::string_view what) {
-  throw std::runtime_error(std::string("static solve: ") + std::string(what) +
-                           " failed: the stiffness matrix is singular (is the body held against "
-                           "rigid motion by its supports?)");
+/// A fill-reducing ordering of K's unknowns that keeps each group's unknowns together (a
+/// particle's components), found on the graph of the groups: CHOLMOD's own choice (AMD, and METIS
+/// where AMD fills badly) on a graph with nine times fewer entries than K's. Ordering K itself
+/// took most of the plate's analysis (METIS on 14 M entries: 1.9 s of 6 s; on the particles
+/// 0.45 s, for 4 % more flops in the factorisation; the beams' AMD: 10 % fewer).
+std::vector<int> group_ordering(const SparseMatrix& K, const std::vector<std::size_t>& group,
+                                cholmod_common& common, int& ordering) {
+  const auto n = static_cast<std::size_t>(K.cols());
+  if (group.size() != n || n == 0) {
+    return {};
+  }
+  std::vector<std::size_t> first(1, 0); // first unknown of each group, then n
+  std::vector<int> index(n, 0);         // each unknown's group, numbered from 0
+  for (std::size_t j = 1; j < n; ++j) {
+    if (group[j] != group[j - 1]) {
+      first.push_back(j);
+    }
+    index[j] = static_cast<int>(first.size() - 1);
+  }
+  const std::size_t groups = first.size();
+  first.push_back(n);
+  // The groups' lower-triangle pattern, by columns (K's unknowns are in group order, so a group's
+  // rows are at or below it).
+  std::vector<int> p(1, 0), rows;
+  std::vector<std::size_t> seen(groups, groups);
+  for (std::size_t g = 0; g < groups; ++g) {
+    const std::size_t start = rows.size();
+    for (std::size_t j = first[g]; j < first[g + 1]; ++j) {
+      for (SparseMatrix::InnerIterator it(K, static_cast<Eigen::Index>(j)); it; ++it) {
+        const int h = index[static_cast<std::size_t>(it.row())];
+        if (seen[static_cast<std::size_t>(h)] != g) {
+          seen[static_cast<std::size_t>(h)] = g;
+          rows.push_back(h);
+        }
+      }
+    }
+    std::sort(rows.begin() + static_cast<std::ptrdiff_t>(start), rows.end());
+    p.push_back(static_cast<int>(rows.size()));
+  }
+  cholmod_sparse pattern{};
+  pattern.nrow = pattern.ncol = groups;
+  pattern.nzmax = rows.size();
+  pattern.p = p.data();
+  pattern.i = rows.data();
+  pattern.stype = -1;
+  pattern.itype = CHOLMOD_INT;
+  pattern.xtype = CHOLMOD_PATTERN;
+  pattern.dtype = CHOLMOD_DOUBLE;
+  pattern.sorted = 1;
+  pattern.packed = 1;
+  cholmod_factor* symbolic = cholmod_analyze(&pattern, &common);
+  if (symbolic == nullptr) {
+    return {};
+  }
+  ordering = common.method[common.selected].ordering;
+  std::vector<int> order;
+  order.reserve(n);
+  const int* perm = static_cast<const int*>(symbolic->Perm);
+  for (std::size_t k = 0; k < groups; ++k) {
+    const auto g = static_cast<std::size_t>(perm[k]);
+    for (std::size_t j = first[g]; j < first[g + 1]; ++j) {
+      order.push_back(static_cast<int>(j));
+    }
+  }
+  cholmod_free_factor(&symbolic, &common);
+  return order;
 }
 
-#ifdef LIBPD_HAVE_SUITESPARSE
-
-/// CHOLMOD supernodal K = L Lᵀ. Eigen's wrapper keeps the cholmod_factor to itself; deriving
-/// from it reaches the factor's sizes.
+/// CHOLMOD supernodal K = L Lᵀ, called directly (Eigen's wrapper chooses the ordering itself).
 class Cholmod final : public SparseFactorisation {
 public:
-  explicit Cholmod(const SparseMatrix& K) {
+  Cholmod(const SparseMatrix& K, const std::vector<std::size_t>& group) {
+    cholmod_start(&common_);
+    common_.supernodal = CHOLMOD_SUPERNODAL;
+    common_.final_asis = 1;
+    const auto start = std::chrono::steady_clock::now();
+    cholmod_sparse A = view(K);
+    std::vector<int> order = group_ordering(K, group, common_, ordering_);
+    if (!order.empty()) {
+      common_.nmethods = 1;
+      common_.method[0].ordering = CHOLMOD_GIVEN;
+      common_.postorder = 1;
+    }
+    factor_ = cholmod_analyze_p(&A, order.empty() ? nullptr : order.data(), nullptr, 0, &common_);
+    if (factor_ == nullptr) {
+      singular("the analysis of the Cholesky factorisation (CHOLMOD)");
+    }
+    analysis_seconds_ =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     // The symbolic analysis knows the factor's size: refuse a factor the machine cannot hold
     // before the numeric factorisation runs into the OOM killer.
-    llt_.analyzePattern(K);
-    if (llt_.info() == Eigen::Success) {
-      check_fits(static_cast<double>(llt_.factor_bytes()));
-    }
-    llt_.factorize(K);
-    if (llt_.info() != Eigen::Success) {
+    check_fits(static_cast<double>(factor_bytes()));
+    if (!cholmod_factorize(&A, factor_, &common_) || common_.status != CHOLMOD_OK ||
+        factor_->minor < factor_->n) {
       singular("the Cholesky factorisation (CHOLMOD)");
     }
   }
-  Eigen::VectorXd solve(const Eigen::VectorXd& b) const override { return llt_.solve(b); }
-  std::string name() const override { return "CHOLMOD supernodal LLT"; }
-  std::size_t factor_nonzeros() const override { return llt_.factor_nonzeros(); }
-  std::size_t factor_bytes() const override { return llt_.factor_bytes(); }
+  ~Cholmod() override {
+    cholmod_free_factor(&factor_, &common_);
+    cholmod_finish(&common_);
+  }
+  Cholmod(const Cholmod&) = delete;
+  Cholmod& operator=(const Cholmod&) = delete;
+
+  Eigen::VectorXd solve(const Eigen::VectorXd& b) const override {
+    cholmod_dense rhs{};
+    rhs.nrow = rhs.nzmax = rhs.d = static_cast<std::size_t>(b.size());
+    rhs.ncol = 1;
+    rhs.x = const_cast<double*>(b.data()); // CHOLMOD reads it only
+    rhs.xtype = CHOLMOD_REAL;
+    rhs.dtype = CHOLMOD_DOUBLE;
+    cholmod_dense* x = cholmod_solve(CHOLMOD_A, factor_, &rhs, &common_);
+    if (x == nullptr) {
+      throw std::runtime_error("static solve: CHOLMOD's triangular solves failed");
+    }
+    Eigen::VectorXd out = Eigen::Map<const Eigen::VectorXd>(static_cast<double*>(x->x), b.size());
+    cholmod_free_dense(&x, &common_);
+    return out;
+  }
+  double analysis_seconds() const override { return analysis_seconds_; }
+  std::string name() const override {
+    switch (ordering_) {
+    case CHOLMOD_AMD:
+      return "CHOLMOD supernodal LLT (AMD ordering of particles)";
+    case CHOLMOD_METIS:
+      return "CHOLMOD supernodal LLT (METIS ordering of particles)";
+    case CHOLMOD_NESDIS:
+      return "CHOLMOD supernodal LLT (nested dissection of particles)";
+    default:
+      return "CHOLMOD supernodal LLT";
+    }
+  }
+  std::size_t factor_nonzeros() const override {
+    return factor_->is_super ? factor_->xsize : factor_->nzmax;
+  }
+  std::size_t factor_bytes() const override {
+    const cholmod_factor& L = *factor_;
+    const std::size_t index = L.itype == CHOLMOD_LONG ? sizeof(SuiteSparse_long) : sizeof(int);
+    // Values, then the integer arrays: Perm and ColCount (n each); supernodal: s and the
+    // super, pi, px pointers; simplicial: i, and p, nz, next, prev.
+    const std::size_t integers =
+        2 * L.n + (L.is_super ? L.ssize + 3 * (L.nsuper + 1) : L.nzmax + 4 * L.n + 2);
+    return factor_nonzeros() * sizeof(double) + integers * index;
+  }
 
 private:
-  class LLT : public Eigen::CholmodSupernodalLLT<SparseMatrix, Eigen::Lower> {
-  public:
-    std::size_t factor_nonzeros() const {
-      const cholmod_factor& L = *m_cholmodFactor;
-      return L.is_super ? L.xsize : L.nzmax;
-    }
-    std::size_t factor_bytes() const {
-      const cholmod_factor& L = *m_cholmodFactor;
-      const std::size_t index = L.itype == CHOLMOD_LONG ? sizeof(SuiteSparse_long) : sizeof(int);
-      // Values, then the integer arrays: Perm and ColCount (n each); supernodal: s and the
-      // super, pi, px pointers; simplicial: i, and p, nz, next, prev.
-      const std::size_t integers =
-          2 * L.n + (L.is_super ? L.ssize + 3 * (L.nsuper + 1) : L.nzmax + 4 * L.n + 2);
-      return factor_nonzeros() * sizeof(double) + integers * index;
-    }
-  };
-  LLT llt_;
+  /// K's lower triangle as CHOLMOD reads it (no copy).
+  static cholmod_sparse view(const SparseMatrix& K) {
+    cholmod_sparse A{};
+    A.nrow = A.ncol = static_cast<std::size_t>(K.rows());
+    A.nzmax = static_cast<std::size_t>(K.nonZeros());
+    A.p = const_cast<int*>(K.outerIndexPtr()); // CHOLMOD reads them only
+    A.i = const_cast<int*>(K.innerIndexPtr());
+    A.x = const_cast<double*>(K.valuePtr());
+    A.stype = -1;
+    A.itype = CHOLMOD_INT;
+    A.xtype = CHOLMOD_REAL;
+    A.dtype = CHOLMOD_DOUBLE;
+    A.sorted = 1;
+    A.packed = 1;
+    return A;
+  }
+
+  mutable cholmod_common common_{};
+  cholmod_factor* factor_ = nullptr;
+  double analysis_seconds_ = 0;
+  int ordering_ = -1; ///< CHOLMOD's ordering method of the particles (-1: CHOLMOD's own of K)
 };
 
 /// UMFPACK's unsymmetric multifrontal LU.
@@ -168,10 +300,12 @@ private:
 
 } // namespace
 
-std::unique_ptr<SparseFactorisation> factorise(const SparseMatrix& K, bool symmetric) {
+std::unique_ptr<SparseFactorisation>
+factorise(const SparseMatrix& K, bool symmetric,
+          [[maybe_unused]] const std::vector<std::size_t>& group) {
 #ifdef LIBPD_HAVE_SUITESPARSE
   if (symmetric) {
-    return std::make_unique<Cholmod>(K);
+    return std::make_unique<Cholmod>(K, group);
   }
   return std::make_unique<Umfpack>(K);
 #else

@@ -14,6 +14,7 @@
 #include <cstddef>
 #include <memory>
 #include <string>
+#include <vector>
 
 namespace pd {
 
@@ -28,11 +29,17 @@ public:
   virtual std::size_t factor_nonzeros() const = 0;
   /// Bytes of the factor's values and indices.
   virtual std::size_t factor_bytes() const = 0;
+  /// Seconds the ordering and symbolic analysis took, where they run apart from the numeric
+  /// factorisation (CHOLMOD); 0 otherwise.
+  virtual double analysis_seconds() const { return 0.0; }
 };
 
 /// Factor K (square, compressed, column-major). `symmetric`: K = Kᵀ (to round-off; only its lower
-/// triangle is read). Throws std::runtime_error if K is singular or not positive definite.
-std::unique_ptr<SparseFactorisation> factorise(const Eigen::SparseMatrix<double>& K,
-                                               bool symmetric);
+/// triangle is read). `group`: empty, or per unknown a number that is the same for unknowns that
+/// belong together (a particle's components; consecutive, nondecreasing): the symmetric
+/// factorisation then orders groups rather than unknowns. Throws std::runtime_error if K is
+/// singular or not positive definite.
+std::unique_ptr<SparseFactorisation> factorise(const Eigen::SparseMatrix<double>& K, bool symmetric,
+                                               const std::vector<std::size_t>& group = {});
 
 } // namespace pd
