@@ -208,7 +208,7 @@ FibreArms fibre_arms(const CorrectionSpec& spec, const FibreKernel& kernel,
   for (std::size_t i = 0; i < n; ++i) {
     for (std::size_t k = family.offsets[i]; k < family.offsets[i + 1]; ++k) {
       const std::size_t j = family.neighbour[k];
-      arms.other[k] = arms.own[reverse[k]] * particles.volume[i] / particles.volume[j];
+      arms.other[k] = arms.own[reverse[k]] * particles.volume[j] / particles.volume[i];
     }
   }
   return arms;

@@ -9,7 +9,8 @@
 // a homogeneous strain gives every particle with a full (or ghost-completed) neighbourhood the
 // continuum stress whatever its neighbours' sizes and spacing (the lattice's or an irregular
 // set's discrete sum differs from the integral by some per cent). The force density on i is
-//   b_i = Σ_j (A_k S_i(q) + B_k S_j(q)) q,   B_k = A_{k'} V_i / V_j   (k' the reverse bond),
+//   b_i = Σ_j (A_k S_i(q) + B_k S_j(q)) q,   B_k = A_{k'} V_j / V_i   (k' the reverse bond),
+// so that V_i B_k = V_j A_{k'}: both ends feel the same tension (eq. 11),
 // and the mean strain of eq. 73 is ε̄_i = (1/N) Σ_j A_k |ξ_k| ε_k, exact for any isotropic strain.
 //
 // On a regular lattice (every body a lattice region) the fourth moment Σ A|ξ| n⊗n⊗n⊗n has cubic,
