@@ -1,5 +1,6 @@
 #include "libpd/discretisation/graded_set.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <random>
@@ -94,11 +95,23 @@ PointCloud generate_graded_set(const GradedSetSpec& spec, double thickness) {
   const ZoneMap map(spec);
   PointCloud cloud;
   // Fig. 7a: every zone holds the same p × p pattern; a particle's volume is its sub-cell's area.
-  const int nu = spec.zones[0] * spec.pattern, nv = spec.zones[1] * spec.pattern;
-  const double du = 1.0 / nu, dv = 1.0 / nv;
-  for (int j = 0; j < nv; ++j) {
-    for (int i = 0; i < nu; ++i) {
-      const double u = (i + 0.5) * du, v = (j + 0.5) * dv;
+  // The ellipse's map is conformal, so its zones are near-square wherever ξ_max/n_ξ ≈ 2π/n_η. A
+  // box's zones are not: a column of zones of width w and height H holds p × round(p H/w) so that
+  // the particles stay about as far apart across as along (a zone of 8:1 leaves columns of
+  // particles that no arm joins).
+  const int nu = spec.zones[0] * spec.pattern;
+  const double du = 1.0 / nu;
+  for (int i = 0; i < nu; ++i) {
+    const double u = (i + 0.5) * du;
+    int nv = spec.zones[1] * spec.pattern;
+    if (spec.shape == GradedShape::box) {
+      const double width = map.jacobian(u, 0.5) / (spec.box.hi[1] - spec.box.lo[1]) * du;
+      const double height = (spec.box.hi[1] - spec.box.lo[1]) / nv;
+      nv = std::max(1, static_cast<int>(std::lround(nv * height / width)));
+    }
+    const double dv = 1.0 / nv;
+    for (int j = 0; j < nv; ++j) {
+      const double v = (j + 0.5) * dv;
       cloud.position.push_back(map.at(u, v));
       cloud.volume.push_back(map.jacobian(u, v) * du * dv * thickness);
     }

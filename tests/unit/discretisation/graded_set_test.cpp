@@ -95,10 +95,22 @@ TEST(GradedSet, BoxZonesGrowByTheGrading) {
     sum += v;
   }
   EXPECT_NEAR(sum, 0.5 * 0.01, 1e-3 * 0.5 * 0.01);
-  // The first and last zones' particles (pattern 2: columns 0, 1 and 18, 19).
-  const double first = p.position[1][0] - p.position[0][0];
-  const double last = p.position[19][0] - p.position[18][0];
-  EXPECT_NEAR(last / first, 10.0, 0.5);
+  // Columns of particles (pattern 2: the first zone holds columns 0, 1, the last 18, 19).
+  std::vector<double> x;
+  for (const pd::Vec3& q : p.position) {
+    if (x.empty() || q[0] != x.back()) {
+      x.push_back(q[0]);
+    }
+  }
+  ASSERT_EQ(x.size(), 20U);
+  EXPECT_NEAR((x[19] - x[18]) / (x[1] - x[0]), 10.0, 0.5);
+  // Each column holds particles about as far apart across as along: the fine end many rows.
+  const auto rows = [&](double column) {
+    return std::count_if(p.position.begin(), p.position.end(),
+                         [&](const pd::Vec3& q) { return q[0] == column; });
+  };
+  EXPECT_NEAR(0.5 / static_cast<double>(rows(x[0])), x[1] - x[0], 0.2 * (x[1] - x[0]));
+  EXPECT_GT(rows(x[0]), 5 * rows(x[19]));
 }
 
 } // namespace

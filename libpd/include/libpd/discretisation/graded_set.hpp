@@ -30,7 +30,9 @@ struct EnumName<GradedShape> {
       {"ellipse", GradedShape::ellipse,
        "the ellipse x = c cosh ξ cos η, y = c sinh ξ sin η, ξ ≤ ξ_max (eq. 114), zones uniform "
        "in ξ and η: finest at the focal points"},
-      {"box", GradedShape::box, "a box, zone widths along x growing geometrically by 'grading'"},
+      {"box", GradedShape::box,
+       "a box, zone widths along x growing geometrically by 'grading', each column of particles "
+       "as many rows as keep them about as far apart across as along"},
   }};
 };
 
@@ -40,10 +42,10 @@ struct GradedSetSpec {
   double xi_max = 2.0;              ///< ξ of the outer boundary (ellipse)
   Box box{};                        ///< [lo, hi] (box)
   double grading = 1.0;             ///< last zone's width over the first's, along x (box)
-  std::array<int, 2> zones{40, 20}; ///< zones along ξ and η (ellipse), x and y (box)
+  std::array<int, 2> zones{40, 20}; ///< zones along ξ and η (ellipse), x and y (box: see cpp)
   int pattern = 5;                  ///< p: each zone holds p × p particles
   double noise = 0.3;               ///< Monte Carlo step, a fraction of the particle's size h
-  double min_spacing = 0.35;         ///< least distance between two particles over h_a + h_b
+  double min_spacing = 0.35;        ///< least distance between two particles over h_a + h_b
   int sweeps = 20;                  ///< Monte Carlo sweeps over all particles
   int size_neighbours = 5;          ///< n of eq. 115
   std::uint64_t seed = 1;
