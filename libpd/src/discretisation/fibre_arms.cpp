@@ -204,6 +204,7 @@ std::pair<Eigen::VectorXd, double> least_change(const std::vector<Eigen::Triplet
 struct Balance {
   std::size_t non_positive = 0;
   double residual = 0;
+  std::vector<std::size_t> losing; ///< particles with an arm that would lose its weight
 };
 Balance balance_odd_moments(int dim, const ParticleSet& particles, const BondFamily& family,
                             const std::vector<std::uint8_t>& balanced,
@@ -288,7 +289,10 @@ Balance balance_odd_moments(int dim, const ParticleSet& particles, const BondFam
         const double side = i < family.neighbour[k] ? 1.0 : -1.0;
         corrected[k] = own[k] * (1.0 + t(static_cast<Eigen::Index>(pair[k]))) +
                        side * split(static_cast<Eigen::Index>(pair[k])) / v[i];
-        out.non_positive += corrected[k] <= 0 ? 1 : 0;
+        if (corrected[k] <= 0) {
+          ++out.non_positive;
+          out.losing.push_back(i);
+        }
       }
     }
   }
@@ -405,8 +409,22 @@ FibreArms fibre_arms(const CorrectionSpec& spec, const FibreKernel& kernel,
     }
   }
   if (particle_factor) {
-    const auto balanced = full_horizons(dim, particles, family, matched, arms.own);
-    const Balance b = balance_odd_moments(dim, particles, family, balanced, matched, arms.own);
+    // Where the least change would take an arm's weight to zero or below, that arm's ends and
+    // their neighbours are left out and the balance solved again (up to three times).
+    auto balanced = full_horizons(dim, particles, family, matched, arms.own);
+    Balance b;
+    for (int attempt = 0; attempt < 4; ++attempt) {
+      b = balance_odd_moments(dim, particles, family, balanced, matched, arms.own);
+      for (const std::size_t i : b.losing) {
+        balanced[i] = 0;
+        for (std::size_t k = family.offsets[i]; k < family.offsets[i + 1]; ++k) {
+          balanced[family.neighbour[k]] = 0;
+        }
+      }
+      if (b.non_positive == 0) {
+        break;
+      }
+    }
     arms.balanced = static_cast<std::size_t>(std::count(balanced.begin(), balanced.end(), 1));
     arms.balance_residual = b.residual;
     arms.balance_refused = b.non_positive;
