@@ -117,6 +117,19 @@ private:
     }
   }
 
+  // The balance of a point cloud's arms (discretisation/fibre_arms.hpp) is all or nothing: where
+  // it would leave an arm without weight it is not applied, and interior particles keep the
+  // force imbalance of their irregular arrangement. Such a run must say so.
+  void check_fibre_balance() {
+    const FibreArms& a = model_.fibre_arms;
+    if (a.balance_refused > 0) {
+      warn(fmt::format("virtual fibres: the arm balance was not applied ({} arms would have lost "
+                       "their weight): under a homogeneous strain interior particles keep forces "
+                       "of order 0.2 σ/h; a more regular particle set avoids this",
+                       a.balance_refused));
+    }
+  }
+
   // An explicit Δt above the eq. 31 limit (times the integrator's own factor) is said before the
   // run and kept in the summary: such a run may still finish, and then its numbers must not pass
   // unremarked. ADR's Δt is fictitious and has no such limit.
@@ -152,6 +165,7 @@ private:
     checkpoints_.emplace(options_, sim_->integrator().checkpoint_refusal());
     check_run_size();
     check_time_step();
+    check_fibre_balance();
     check_steady_tolerance();
   }
 

@@ -3,6 +3,7 @@
 #include "libpd/discretisation/point_cloud.hpp"
 
 #include <Eigen/Dense>
+#include <Eigen/Sparse>
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -50,22 +51,23 @@ MomentWeights fibre_moment_weights(const CorrectionSpec& spec, const FibreKernel
   return m;
 }
 
-/// Exponents (a, b, c) of the monomials q_x^a q_y^b q_z^c of degree 4 in `dim` dimensions, and
-/// each one's mean over the unit circle or sphere.
+/// Exponents (a, b, c) of the monomials q_x^a q_y^b q_z^c of degree `degree` in `dim`
+/// dimensions, and each one's mean over the unit circle or sphere (for degree 4; odd monomials
+/// have mean 0, the only means degree 3 needs).
 struct Quartic {
   std::array<int, 3> power;
   double mean;
 };
-std::vector<Quartic> quartics(int dim) {
+std::vector<Quartic> monomials(int dim, int degree) {
   std::vector<Quartic> out;
-  for (int a = 4; a >= 0; --a) {
-    for (int b = 4 - a; b >= 0; --b) {
-      const int c = 4 - a - b;
+  for (int a = degree; a >= 0; --a) {
+    for (int b = degree - a; b >= 0; --b) {
+      const int c = degree - a - b;
       if (dim == 2 && c != 0) {
         continue;
       }
       const bool even = a % 2 == 0 && b % 2 == 0 && c % 2 == 0;
-      const bool single = a == 4 || b == 4 || c == 4;
+      const bool single = a == degree || b == degree || c == degree;
       const double mean = !even      ? 0.0
                           : dim == 2 ? (single ? 3.0 / 8 : 1.0 / 8)
                                      : (single ? 1.0 / 5 : 1.0 / 15);
@@ -73,6 +75,22 @@ std::vector<Quartic> quartics(int dim) {
     }
   }
   return out;
+}
+std::vector<Quartic> quartics(int dim) {
+  return monomials(dim, 4);
+}
+
+double monomial(const std::array<int, 3>& p, const std::array<double, 3>& q) {
+  return std::pow(q[0], p[0]) * std::pow(q[1], p[1]) * std::pow(q[2], p[2]);
+}
+
+/// Unit vector from particle i to the neighbour of directed bond k.
+std::array<double, 3> arm_direction(const ParticleSet& particles, const BondFamily& family,
+                                    std::size_t i, std::size_t k) {
+  const Vec3& pi = particles.position[i];
+  const Vec3& pj = particles.position[family.neighbour[k]];
+  const double inv = family.inverse_length[k];
+  return {(pj[0] - pi[0]) * inv, (pj[1] - pi[1]) * inv, (pj[2] - pi[2]) * inv};
 }
 
 /// Per-particle moment weights off the lattice: the own weights of particle i's arms
@@ -82,7 +100,7 @@ std::vector<Quartic> quartics(int dim) {
 /// the continuum's stress whatever its neighbours' arrangement (eq. 36 with an isotropic
 /// arrangement is what the paper assumes). Left unchanged where the system is singular or a
 /// factor would fall below 0.1 (too few or too lopsided neighbours).
-void match_fourth_moments(int dim, const ParticleSet& particles, const BondFamily& family,
+bool match_fourth_moments(int dim, const ParticleSet& particles, const BondFamily& family,
                           std::size_t i, std::vector<double>& own) {
   const auto basis = quartics(dim);
   const auto m = static_cast<Eigen::Index>(basis.size());
@@ -91,17 +109,12 @@ void match_fourth_moments(int dim, const ParticleSet& particles, const BondFamil
   Eigen::VectorXd w(static_cast<Eigen::Index>(end - begin));
   double total = 0;
   for (std::size_t k = begin; k < end; ++k) {
-    const Vec3& pi = particles.position[i];
-    const Vec3& pj = particles.position[family.neighbour[k]];
-    const double inv = family.inverse_length[k];
-    const std::array<double, 3> q{(pj[0] - pi[0]) * inv, (pj[1] - pi[1]) * inv,
-                                  (pj[2] - pi[2]) * inv};
+    const auto q = arm_direction(particles, family, i, k);
     const auto row = static_cast<Eigen::Index>(k - begin);
     for (Eigen::Index n = 0; n < m; ++n) {
-      const auto& p = basis[static_cast<std::size_t>(n)].power;
-      phi(row, n) = std::pow(q[0], p[0]) * std::pow(q[1], p[1]) * std::pow(q[2], p[2]);
+      phi(row, n) = monomial(basis[static_cast<std::size_t>(n)].power, q);
     }
-    w(row) = own[k] / inv;
+    w(row) = own[k] / family.inverse_length[k];
     total += w(row);
   }
   const Eigen::MatrixXd gram = phi.transpose() * w.asDiagonal() * phi;
@@ -111,15 +124,205 @@ void match_fourth_moments(int dim, const ParticleSet& particles, const BondFamil
   }
   const Eigen::FullPivLU<Eigen::MatrixXd> lu(gram);
   if (!lu.isInvertible()) {
-    return;
+    return false;
   }
   const Eigen::VectorXd factor = phi * lu.solve(target);
   if (!(factor.minCoeff() >= 0.1)) {
-    return;
+    return false;
   }
   for (std::size_t k = begin; k < end; ++k) {
     own[k] *= factor(static_cast<Eigen::Index>(k - begin));
   }
+  return true;
+}
+
+/// Odd moments of a particle's arms, relative to their total weight: |Σ_j A_k |ξ_k| q_k| / N.
+/// Near 0 where the horizon is full, of order 1/2 on a free surface.
+double first_moment(int dim, const ParticleSet& particles, const BondFamily& family, std::size_t i,
+                    const std::vector<double>& own) {
+  std::array<double, 3> m{0, 0, 0};
+  for (std::size_t k = family.offsets[i]; k < family.offsets[i + 1]; ++k) {
+    const auto q = arm_direction(particles, family, i, k);
+    for (std::size_t c = 0; c < 3; ++c) {
+      m[c] += own[k] / family.inverse_length[k] * q[c];
+    }
+  }
+  return std::sqrt(m[0] * m[0] + m[1] * m[1] + m[2] * m[2]) / dim;
+}
+
+/// The pair stiffness of arm k (i→j) under a homogeneous strain, α = V_i A_k + V_j A_k':
+/// the arm's tension is α S(q) (eqs. 64, 70) once every particle has the continuum's S.
+double pair_weight(const ParticleSet& particles, const BondFamily& family,
+                   const std::vector<std::size_t>& reverse, const std::vector<double>& own,
+                   std::size_t i, std::size_t k) {
+  return particles.volume[i] * own[k] + particles.volume[family.neighbour[k]] * own[reverse[k]];
+}
+
+/// The least change x (in the metric Σ x²/g) with C x = r: x = G Cᵀλ, C G Cᵀ λ = r, by
+/// conjugate gradients with an incomplete Cholesky factor (C G Cᵀ is a block graph Laplacian,
+/// 9 rows per particle in 2D, 25 in 3D). Returns x and the relative residual ‖Cx − r‖/‖r‖.
+std::pair<Eigen::VectorXd, double> least_change(const std::vector<Eigen::Triplet<double>>& entries,
+                                                const std::vector<double>& rhs,
+                                                const std::vector<double>& g) {
+  Eigen::SparseMatrix<double> c(static_cast<Eigen::Index>(rhs.size()),
+                                static_cast<Eigen::Index>(g.size()));
+  c.setFromTriplets(entries.begin(), entries.end());
+  const Eigen::Map<const Eigen::VectorXd> metric(g.data(), static_cast<Eigen::Index>(g.size()));
+  const Eigen::Map<const Eigen::VectorXd> r(rhs.data(), static_cast<Eigen::Index>(rhs.size()));
+  const Eigen::SparseMatrix<double> cg_t = c * metric.asDiagonal();
+  const Eigen::SparseMatrix<double> normal = cg_t * c.transpose();
+  Eigen::ConjugateGradient<Eigen::SparseMatrix<double>, Eigen::Lower | Eigen::Upper,
+                           Eigen::IncompleteCholesky<double>>
+      cg(normal);
+  // 1e-9 leaves interior forces of about 1e-7 σ/h (tests/unit/discretisation/point_cloud_test).
+  cg.setTolerance(1e-9);
+  cg.setMaxIterations(5000);
+  const Eigen::VectorXd x = cg_t.transpose() * cg.solve(r);
+  return {x, (c * x - r).norm() / std::max(r.norm(), 1e-300)};
+}
+
+/// Make the arm forces at the `balanced` particles cancel under every homogeneous strain.
+///
+/// Under a homogeneous strain every particle has the continuum's force flux density S(q), a
+/// quadratic form in q (eq. 77), and the arm a–b carries α_ab S(q_ab) with the pair weight
+/// α_ab = V_a A_ab + V_b A_ba (eqs. 64, 70). The net force on a, Σ_b α_ab S(q_ab) q_ab, vanishes
+/// for every strain iff the third moment Σ_b α_ab q⊗q⊗q is zero (its trace, the first moment,
+/// then is too). Even-moment weights cannot give that on an irregular set, and no per-particle
+/// rule can: α_ab holds b's weight as well as a's (Newton's third law couples the particles).
+/// Two least-change solves over the pairs do it:
+///  1. the pair weights α_ab(1 + t_ab), least Σ α t², zero the third moments of the balanced
+///     particles;
+///  2. each pair's change d = α t is split between its ends, A_ab += (d/2 + e_ab)/V_a and
+///     A_ba += (d/2 − e_ab)/V_b, with e (least Σ e²/β, β the smaller end's V A) such that every
+///     particle keeps its fourth moments Σ_b A_ab |ξ| q⊗q⊗q⊗q: its stress under a homogeneous
+///     strain and, by their trace, the mean strain ε̄ of eq. 73.
+/// Each arm's tension stays equal and opposite at its ends and the model keeps its energy. This
+/// is the discrete form of the integration constraint of SPH and meshfree methods (a homogeneous
+/// stress has no divergence), which the paper takes for granted when it replaces sums by
+/// integrals (eq. 59). Particles left out (near free surfaces) take up what the body's arms
+/// leave, as a surface traction does. Nothing is changed if a weight would not stay positive.
+struct Balance {
+  std::size_t non_positive = 0;
+  double residual = 0;
+  std::vector<std::size_t> losing; ///< particles with an arm that would lose its weight
+};
+Balance balance_odd_moments(int dim, const ParticleSet& particles, const BondFamily& family,
+                            const std::vector<std::uint8_t>& balanced,
+                            const std::vector<std::uint8_t>& matched, std::vector<double>& own) {
+  const auto odd = monomials(dim, 3);
+  const auto even = monomials(dim, 4);
+  const std::size_t n = particles.size();
+  const auto reverse = reverse_bond_index(family);
+  const auto& v = particles.volume;
+  constexpr std::size_t none = static_cast<std::size_t>(-1);
+  // One unknown per pair whose ends both carry energy; side +1 at its lower-index end.
+  std::vector<std::size_t> pair(family.directed_bond_count(), none);
+  std::vector<double> alpha, beta;
+  for (std::size_t i = 0; i < n; ++i) {
+    for (std::size_t k = family.offsets[i]; k < family.offsets[i + 1]; ++k) {
+      const std::size_t j = family.neighbour[k];
+      if (i < j && own[k] > 0 && own[reverse[k]] > 0) {
+        pair[k] = pair[reverse[k]] = alpha.size();
+        alpha.push_back(pair_weight(particles, family, reverse, own, i, k));
+        beta.push_back(std::min(v[i] * own[k], v[j] * own[reverse[k]]));
+      }
+    }
+  }
+  if (alpha.empty()) {
+    return {};
+  }
+  // Unknowns [t, e], least Σ α t² + Σ e²/β. Third-moment rows (balanced particles) in units of
+  // the particle's total pair weight, fourth-moment rows (matched particles) of Σ V A|ξ|.
+  const std::size_t np = alpha.size();
+  std::vector<Eigen::Triplet<double>> entries;
+  std::vector<double> rhs;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!matched[i]) {
+      continue;
+    }
+    double pair_scale = 0, own_scale = 0;
+    for (std::size_t k = family.offsets[i]; k < family.offsets[i + 1]; ++k) {
+      pair_scale += pair_weight(particles, family, reverse, own, i, k);
+      own_scale += v[i] * own[k] / family.inverse_length[k];
+    }
+    const std::size_t row = rhs.size();
+    const std::size_t odd_rows = balanced[i] ? odd.size() : 0;
+    rhs.resize(row + odd_rows + even.size(), 0.0);
+    for (std::size_t k = family.offsets[i]; k < family.offsets[i + 1]; ++k) {
+      const auto q = arm_direction(particles, family, i, k);
+      const auto col = static_cast<Eigen::Index>(pair[k]);
+      const double a = pair_weight(particles, family, reverse, own, i, k) / pair_scale;
+      for (std::size_t o = 0; o < odd_rows; ++o) {
+        const double phi = a * monomial(odd[o].power, q);
+        rhs[row + o] -= phi;
+        if (pair[k] != none) {
+          entries.emplace_back(static_cast<Eigen::Index>(row + o), col, phi);
+        }
+      }
+      if (pair[k] == none) {
+        continue;
+      }
+      const double side = i < family.neighbour[k] ? 1.0 : -1.0;
+      const double length = 1.0 / family.inverse_length[k] / own_scale;
+      for (std::size_t e = 0; e < even.size(); ++e) {
+        const double psi = length * monomial(even[e].power, q);
+        const auto r = static_cast<Eigen::Index>(row + odd_rows + e);
+        entries.emplace_back(r, col, v[i] * own[k] * psi);
+        entries.emplace_back(r, col + static_cast<Eigen::Index>(np), side * psi);
+      }
+    }
+  }
+  std::vector<double> metric(2 * np);
+  for (std::size_t p = 0; p < np; ++p) {
+    metric[p] = 1.0 / alpha[p];
+    metric[np + p] = beta[p];
+  }
+  const auto [x, residual] = least_change(entries, rhs, metric);
+  const Eigen::VectorXd t = x.head(static_cast<Eigen::Index>(np));
+  const Eigen::VectorXd split = x.tail(static_cast<Eigen::Index>(np));
+  Balance out;
+  out.residual = residual;
+  std::vector<double> corrected = own;
+  for (std::size_t i = 0; i < n; ++i) {
+    for (std::size_t k = family.offsets[i]; k < family.offsets[i + 1]; ++k) {
+      if (pair[k] != none) {
+        const double side = i < family.neighbour[k] ? 1.0 : -1.0;
+        corrected[k] = own[k] * (1.0 + t(static_cast<Eigen::Index>(pair[k]))) +
+                       side * split(static_cast<Eigen::Index>(pair[k])) / v[i];
+        if (corrected[k] <= 0) {
+          ++out.non_positive;
+          out.losing.push_back(i);
+        }
+      }
+    }
+  }
+  if (out.non_positive == 0) {
+    own = std::move(corrected);
+  }
+  return out;
+}
+
+/// The particles to balance: those whose horizon the body fills. A particle is on a free surface
+/// if its fourth moments could not be matched or its weighted first moment exceeds 0.2 (measured
+/// on the graded plate of point_cloud_test: at most 0.11 with a full horizon, at least 0.23 within
+/// half a horizon of the edge); it and every particle with an arm to it are left out.
+std::vector<std::uint8_t> full_horizons(int dim, const ParticleSet& particles,
+                                        const BondFamily& family,
+                                        const std::vector<std::uint8_t>& matched,
+                                        const std::vector<double>& own) {
+  const std::size_t n = particles.size();
+  std::vector<std::uint8_t> surface(n, 0), full(n, 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    surface[i] = !matched[i] || first_moment(dim, particles, family, i, own) > 0.2 ? 1 : 0;
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    bool near = surface[i] != 0;
+    for (std::size_t k = family.offsets[i]; k < family.offsets[i + 1] && !near; ++k) {
+      near = surface[family.neighbour[k]] != 0;
+    }
+    full[i] = near ? 0 : 1;
+  }
+  return full;
 }
 
 } // namespace
@@ -175,6 +378,7 @@ FibreArms fibre_arms(const CorrectionSpec& spec, const FibreKernel& kernel,
   arms.other.assign(nb, 0.0);
   // Unnormalised own weights V_j w_ij (times the lattice factor), then the per-particle sum.
   std::vector<double> total(n, 0.0);
+  std::vector<std::uint8_t> matched(n, 0);
   for (std::size_t i = 0; i < n; ++i) {
     if (!owns_energy[i]) {
       continue;
@@ -189,7 +393,7 @@ FibreArms fibre_arms(const CorrectionSpec& spec, const FibreKernel& kernel,
       arms.own[k] = particles.volume[j] * kernel_weight(kernel, dim, r, size[i]) * factor;
     }
     if (particle_factor) {
-      match_fourth_moments(dim, particles, family, i, arms.own);
+      matched[i] = match_fourth_moments(dim, particles, family, i, arms.own) ? 1 : 0;
     }
     for (std::size_t k = family.offsets[i]; k < family.offsets[i + 1]; ++k) {
       total[i] += arms.own[k] / family.inverse_length[k];
@@ -204,11 +408,32 @@ FibreArms fibre_arms(const CorrectionSpec& spec, const FibreKernel& kernel,
       arms.own[k] *= dim / total[i];
     }
   }
+  if (particle_factor) {
+    // Where the least change would take an arm's weight to zero or below, that arm's ends and
+    // their neighbours are left out and the balance solved again (up to three times).
+    auto balanced = full_horizons(dim, particles, family, matched, arms.own);
+    Balance b;
+    for (int attempt = 0; attempt < 4; ++attempt) {
+      b = balance_odd_moments(dim, particles, family, balanced, matched, arms.own);
+      for (const std::size_t i : b.losing) {
+        balanced[i] = 0;
+        for (std::size_t k = family.offsets[i]; k < family.offsets[i + 1]; ++k) {
+          balanced[family.neighbour[k]] = 0;
+        }
+      }
+      if (b.non_positive == 0) {
+        break;
+      }
+    }
+    arms.balanced = static_cast<std::size_t>(std::count(balanced.begin(), balanced.end(), 1));
+    arms.balance_residual = b.residual;
+    arms.balance_refused = b.non_positive;
+  }
   const auto reverse = reverse_bond_index(family);
   for (std::size_t i = 0; i < n; ++i) {
     for (std::size_t k = family.offsets[i]; k < family.offsets[i + 1]; ++k) {
       const std::size_t j = family.neighbour[k];
-      arms.other[k] = arms.own[reverse[k]] * particles.volume[i] / particles.volume[j];
+      arms.other[k] = arms.own[reverse[k]] * particles.volume[j] / particles.volume[i];
     }
   }
   return arms;

@@ -68,14 +68,14 @@ double distance(const Vec3& a, const Vec3& b) {
 
 } // namespace
 
-std::vector<double> sizes_from_neighbours(const std::vector<Vec3>& points, int dim,
-                                          int neighbours) {
+std::vector<std::vector<std::uint32_t>> nearest_neighbours(const std::vector<Vec3>& points, int dim,
+                                                           int count) {
   const std::size_t n = points.size();
-  std::vector<double> h(n, 0.0);
+  std::vector<std::vector<std::uint32_t>> out(n);
   if (n < 2) {
-    return h;
+    return out;
   }
-  const auto want = std::min<std::size_t>(static_cast<std::size_t>(neighbours), n - 1);
+  const auto want = std::min<std::size_t>(static_cast<std::size_t>(count), n - 1);
   // A cell holding a few points on average: the bounding box's measure per point.
   Vec3 lo = points[0], hi = points[0];
   for (const Vec3& p : points) {
@@ -111,11 +111,24 @@ std::vector<double> sizes_from_neighbours(const std::vector<Vec3>& points, int d
       }
     }
     std::sort(found.begin(), found.end());
-    double sum = 0;
+    out[i].reserve(want);
     for (std::size_t k = 0; k < want; ++k) {
-      sum += found[k].first;
+      out[i].push_back(found[k].second);
     }
-    h[i] = sum / (2.0 * static_cast<double>(want)); // eq. 115
+  }
+  return out;
+}
+
+std::vector<double> sizes_from_neighbours(const std::vector<Vec3>& points, int dim,
+                                          int neighbours) {
+  const auto near = nearest_neighbours(points, dim, neighbours);
+  std::vector<double> h(points.size(), 0.0);
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    double sum = 0;
+    for (const std::uint32_t q : near[i]) {
+      sum += distance(points[i], points[q]);
+    }
+    h[i] = near[i].empty() ? 0.0 : sum / (2.0 * static_cast<double>(near[i].size())); // eq. 115
   }
   return h;
 }

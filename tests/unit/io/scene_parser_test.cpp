@@ -186,8 +186,8 @@ lattice:
 }
 
 TEST(SceneParser, MissingBoxOfBody) {
-  EXPECT_TRUE(
-      fails_at(yaml(R"(
+  EXPECT_TRUE(fails_at(
+      yaml(R"(
 dimension: 1
 lattice:
   spacing: 0.1
@@ -201,7 +201,7 @@ bodies:
 solver:
   end_time: 1
 )"),
-               9, 5, "missing 'box', 'boxes', 'cylinder', 'sphere' or 'particles' in body 'bar'"));
+      9, 5, "missing 'box', 'boxes', 'cylinder', 'sphere', 'particles' or 'graded' in body 'bar'"));
 }
 
 TEST(SceneParser, BoxAndBoxesTogether) {
@@ -1297,3 +1297,58 @@ TEST(SceneParser, ParticleFileWithBadContentIsRefusedNamingFileAndRow) {
   EXPECT_TRUE(fails_at(particle_scene("x,y,volume\n0,0,0.01\n0.1,0,0.01\n", "micro-elastic"), 12,
                        16, "only the virtual-fibre model"));
 }
+
+namespace {
+
+std::string graded_scene(const std::string& graded) {
+  return "dimension: 2\n"
+         "plane: strain\n"
+         "lattice:\n"
+         "  spacing: 0.01\n"
+         "materials:\n"
+         "  m:\n"
+         "    youngs_modulus: 210e9\n"
+         "    poisson_ratio: 0.3\n"
+         "    density: 7800\n"
+         "bodies:\n"
+         "  - name: disk\n"
+         "    material: m\n"
+         "    graded:\n" +
+         graded +
+         "model:\n"
+         "  bond_model: virtual-fibres\n"
+         "solver:\n"
+         "  integrator: adr\n"
+         "  end_time: 1\n";
+}
+
+TEST(SceneParser, GradedBodyIsGeneratedDeterministically) {
+  const std::string text = graded_scene("      focal_half_distance: 0.0416667\n"
+                                        "      zones: [8, 6]\n"
+                                        "      pattern: 3\n"
+                                        "      seed: 4\n");
+  const pd::Scene a = pd::parse_scene(text, "s.yaml");
+  const pd::Scene b = pd::parse_scene(text, "s.yaml");
+  ASSERT_TRUE(a.model.bodies.front().points);
+  EXPECT_EQ(a.model.bodies.front().points->count(), 8U * 6U * 9U);
+  EXPECT_EQ(a.model.bodies.front().points->position, b.model.bodies.front().points->position);
+  const pd::Model m = pd::build_model(a.model);
+  EXPECT_EQ(m.size(), 8U * 6U * 9U);
+}
+
+TEST(SceneParser, GradedBodyErrorsNameTheLine) {
+  // Errors point at the value (zones: line 15, column 14) or at the graded map (line 14).
+  EXPECT_TRUE(fails_at(graded_scene("      focal_half_distance: 0.04\n"
+                                    "      zones: [8.5, 6]\n"),
+                       15, 14, "must be two integers"));
+  EXPECT_TRUE(
+      fails_at(graded_scene("      zones: [8, 6]\n"), 14, 7, "needs 'focal_half_distance'"));
+  EXPECT_TRUE(fails_at(graded_scene("      shape: box\n"
+                                    "      zones: [8, 6]\n"),
+                       14, 7, "needs 'box'"));
+  EXPECT_TRUE(fails_at(graded_scene("      focal_half_distance: 0.04\n"
+                                    "      noise: -1\n"),
+                       15, 14, "noise"));
+}
+
+} // namespace

@@ -9,7 +9,8 @@
 // a homogeneous strain gives every particle with a full (or ghost-completed) neighbourhood the
 // continuum stress whatever its neighbours' sizes and spacing (the lattice's or an irregular
 // set's discrete sum differs from the integral by some per cent). The force density on i is
-//   b_i = Σ_j (A_k S_i(q) + B_k S_j(q)) q,   B_k = A_{k'} V_i / V_j   (k' the reverse bond),
+//   b_i = Σ_j (A_k S_i(q) + B_k S_j(q)) q,   B_k = A_{k'} V_j / V_i   (k' the reverse bond),
+// so that V_i B_k = V_j A_{k'}: both ends feel the same tension (eq. 11),
 // and the mean strain of eq. 73 is ε̄_i = (1/N) Σ_j A_k |ξ_k| ε_k, exact for any isotropic strain.
 //
 // On a regular lattice (every body a lattice region) the fourth moment Σ A|ξ| n⊗n⊗n⊗n has cubic,
@@ -20,15 +21,14 @@
 // instead, a quartic p(q) whose coefficients make that particle's weighted fourth moments the
 // isotropic ones, so that a homogeneous strain gives every particle with a full horizon the
 // continuum stress on any arrangement (graded, jittered: 2e-6, against 21 % with the kernel
-// weights alone). What these even-moment weights cannot remove is the arms' force imbalance on
-// an irregular set (an odd moment): under a homogeneous strain interior particles keep forces of
-// about 0.2 σ/h (tests/unit/discretisation/point_cloud_test.cpp). Where h varies the imbalance is
-// systematic, along ∇h (mean 0.033 σ/h on a ten-fold graded plate): each end weights an arm with
-// its own kernel (eq. 70), and the neighbours' kernels are not symmetric about a particle where h
-// varies (SPH's missing grad-h terms). It acts like a body force proportional to the strain: a
-// graded plate held at its fine end and pulled at its coarse one shows a displacement decaying
-// exponentially from the load. Until a correction lands, graded particle sets are not fit for
-// loaded problems.
+// weights alone). Even moments cannot cancel the arms' forces on an irregular set: that is the
+// third moment of the pair weights α_ab = V_a A_ab + V_b A_ba, about 0.2 σ/h at interior particles
+// of a graded, jittered plate. So point clouds are then balanced (fibre_arms.cpp,
+// balance_odd_moments): each pair's weights are scaled and split between its ends, by the least
+// change, so that every particle with a full horizon has zero third moment (no net force under
+// any homogeneous strain: the integration constraint of meshfree methods) and every particle
+// keeps its fourth moments; 1e-7 σ/h is left (the solver's tolerance). Arm tensions stay equal
+// and opposite at both ends and derive from the energy below.
 //
 // Particles that are extrapolated (ghosts, quadratic clamps: ghost_layers.hpp) own no energy:
 // their A is zero, so each body particle stores the bulk energy of the field it sees
@@ -52,6 +52,11 @@ struct FibreArms {
   std::vector<double> other;      ///< B_k per directed bond [1/m]
   std::vector<double> shear;      ///< G(N+2) of each particle's material [Pa]
   std::vector<double> volumetric; ///< NK − G(N+2) of each particle's material [Pa]
+  /// Point clouds: particles whose third moments were zeroed (fibre_arms), the constraints'
+  /// relative residual, and the arms that would have turned non-positive (then none changed).
+  std::size_t balanced = 0;
+  double balance_residual = 0;
+  std::size_t balance_refused = 0;
 
   bool empty() const { return own.empty(); }
 };

@@ -6,6 +6,7 @@
 #include "libpd/core/geometry.hpp"
 #include "libpd/discretisation/bond_family.hpp"
 
+#include <cstdint>
 #include <vector>
 
 namespace pd {
@@ -17,6 +18,11 @@ struct PointCloud {
 
   std::size_t count() const { return position.size(); }
 };
+
+/// The indices of each point's `count` nearest other points (fewer if the set is smaller),
+/// nearest first, ties broken by index. A cell list of the mean spacing.
+std::vector<std::vector<std::uint32_t>> nearest_neighbours(const std::vector<Vec3>& points, int dim,
+                                                           int count);
 
 /// Sizes by eq. 115: h_a = Σ_{b among the n nearest} |x_b − x_a| / (2n), for every point of
 /// `points` among all of them (n = `neighbours`, fewer if the set is smaller). O(N log N + N n)

@@ -1,4 +1,6 @@
 // The `bodies` list: regions of the lattice or particle files, each made of one material.
+#include "bind.hpp"
+#include "libpd/discretisation/graded_set.hpp"
 #include "libpd/io/particle_file.hpp"
 #include "sections.hpp"
 
@@ -9,6 +11,74 @@
 namespace pd::scene {
 
 namespace {
+
+/// `bodies[].graded`: a generated graded particle set (discretisation/graded_set.hpp).
+constexpr Key graded_keys[] = {
+    {.name = "shape",
+     .type = Type::choice,
+     .doc = "the zone grid",
+     .choices = enum_words<GradedShape>,
+     .bind = field_with_default<&GradedSetSpec::shape>()},
+    {.name = "focal_half_distance",
+     .type = Type::number,
+     .doc = "ellipse: c of eq. 114, half the distance between the focal points (a crack between "
+            "them is a 'cracks' entry)",
+     .unit = "m",
+     .range = positive,
+     .example = "0.0416667",
+     .bind = field<&GradedSetSpec::focal_half_distance>()},
+    {.name = "xi_max",
+     .type = Type::number,
+     .doc = "ellipse: ξ of the boundary; semi-axes c cosh ξ_max, c sinh ξ_max",
+     .range = positive,
+     .bind = field_with_default<&GradedSetSpec::xi_max>()},
+    {.name = "box",
+     .type = Type::box,
+     .doc = "box: the region [[lo], [hi]]",
+     .unit = "m",
+     .example = "[[0, 0], [1, 0.5]]",
+     .show = Show::commented},
+    {.name = "grading",
+     .type = Type::number,
+     .doc = "box: the last zone's width along x over the first's (geometric growth)",
+     .range = positive,
+     .bind = field_with_default<&GradedSetSpec::grading>()},
+    {.name = "zones",
+     .type = Type::vector,
+     .doc = "numbers of zones along ξ and η (ellipse) or x and y (box), integers ≥ 1",
+     .bind = {.default_text =
+                  [] {
+                    const auto z = GradedSetSpec{}.zones;
+                    return fmt::format("[{}, {}]", z[0], z[1]);
+                  }}},
+    {.name = "pattern",
+     .type = Type::integer,
+     .doc = "each zone holds pattern × pattern particles (the paper: 5)",
+     .range = at_least_one,
+     .bind = field_with_default<&GradedSetSpec::pattern>()},
+    {.name = "noise",
+     .type = Type::number,
+     .doc = "Monte Carlo step, a fraction of the particle's size h (Fig. 8)",
+     .range = non_negative,
+     .bind = field_with_default<&GradedSetSpec::noise>()},
+    {.name = "min_spacing",
+     .type = Type::number,
+     .doc = "a move is kept only if the particle stays this × (h_a + h_b) from its neighbours",
+     .range = non_negative,
+     .bind = field_with_default<&GradedSetSpec::min_spacing>()},
+    {.name = "sweeps",
+     .type = Type::integer,
+     .doc = "Monte Carlo sweeps over all particles; sizes are refreshed every fifth",
+     .range = non_negative,
+     .bind = field_with_default<&GradedSetSpec::sweeps>()},
+    {.name = "seed",
+     .type = Type::integer,
+     .doc = "seed of the random moves: the same seed gives the same particles",
+     .range = non_negative,
+     .bind = field_with_default<&GradedSetSpec::seed>()},
+};
+
+constexpr Section graded_section{"under 'graded'", graded_keys};
 
 constexpr Key body_keys[] = {
     name_key("unique name of the body", "bar"),
@@ -35,6 +105,15 @@ constexpr Key body_keys[] = {
      .need = Need::one_of,
      .group = 1,
      .show = Show::commented},
+    {.name = "graded",
+     .type = Type::section,
+     .doc = "instead of box: a generated graded particle set (Olsson et al. 2021, §10.2); 2D, "
+            "virtual fibres only",
+     .need = Need::one_of,
+     .group = 1,
+     .only_dim = 2,
+     .show = Show::commented,
+     .section = &graded_section},
 };
 
 /// A body of given particles: its file read (errors name the file and the row), its region the
@@ -59,6 +138,52 @@ void read_particle_body(Reader& r, const Fields& f, BodySpec& body, Marks& marks
   }
   body.region.boxes = {bounds};
   marks.body_box_nodes.push_back({e->at()});
+}
+
+/// A generated graded body: its spec read (keys bound to GradedSetSpec, `box` and `zones` by
+/// hand), its particles generated now, deterministically, and its region their bounding box.
+void read_graded_body(Reader& r, const Fields& body_fields, const ModelSpec& model, BodySpec& body,
+                      Marks& marks) {
+  const Fields f = r.section(body_fields, "graded");
+  const YAML::Node at = body_fields.find("graded")->at();
+  GradedSetSpec spec;
+  r.read_bound(f, spec);
+  spec.size_neighbours = model.fibre_kernel.size_neighbours;
+  if (const Entry* z = f.find("zones")) {
+    const Vec3 v = *r.vector(f, "zones");
+    for (std::size_t a = 0; a < 2; ++a) {
+      if (!(v[a] >= 1) || v[a] != std::floor(v[a]) || v[a] > 1e6) {
+        r.fail(z->at(), fmt::format("{} must be two integers ≥ 1", f.label("zones")),
+               "write e.g. 'zones: [40, 20]'");
+      }
+      spec.zones[a] = static_cast<int>(v[a]);
+    }
+  }
+  if (spec.shape == GradedShape::ellipse && !f.has("focal_half_distance")) {
+    r.fail(at, "a graded ellipse needs 'focal_half_distance'",
+           "add 'focal_half_distance: 0.0416667' (c of eq. 114)");
+  }
+  if (spec.shape == GradedShape::box) {
+    const Entry* b = f.find("box");
+    if (b == nullptr) {
+      r.fail(at, "a graded box needs 'box'", "add 'box: [[0, 0], [1, 0.5]]'");
+    }
+    spec.box = r.box(b->at(), f.label("box"));
+    if (!(spec.box.hi[0] > spec.box.lo[0] && spec.box.hi[1] > spec.box.lo[1])) {
+      r.fail(b->at(), fmt::format("{} has no area", f.label("box")), "give lo < hi in x and y");
+    }
+  }
+  body.points =
+      std::make_shared<const PointCloud>(generate_graded_set(spec, model.dimension.thickness));
+  Box bounds{body.points->position.front(), body.points->position.front()};
+  for (const Vec3& p : body.points->position) {
+    for (std::size_t a = 0; a < 3; ++a) {
+      bounds.lo[a] = std::min(bounds.lo[a], p[a]);
+      bounds.hi[a] = std::max(bounds.hi[a], p[a]);
+    }
+  }
+  body.region.boxes = {bounds};
+  marks.body_box_nodes.push_back({at});
 }
 
 } // namespace
@@ -93,13 +218,18 @@ void read_bodies(Reader& r, ModelSpec& model, Marks& marks) {
              suggestion(material, material_names, "materials defined"));
     }
     body.material = static_cast<int>(found - material_names.begin());
-    if (f.has("particles")) {
-      read_particle_body(r, f, body, marks);
-      marks.body_nodes.push_back(f.find("particles")->at());
+    if (f.has("particles") || f.has("graded")) {
+      const bool file = f.has("particles");
+      if (file) {
+        read_particle_body(r, f, body, marks);
+      } else {
+        read_graded_body(r, f, model, body, marks);
+      }
+      marks.body_nodes.push_back(f.find(file ? "particles" : "graded")->at());
       if (const Entry* minus = f.find("minus")) {
         r.fail(minus->name,
-               fmt::format("body '{}' is read from a particle file: 'minus' applies "
-                           "only to lattice bodies",
+               fmt::format("body '{}' is given as particles: 'minus' applies only to lattice "
+                           "bodies",
                            body.name),
                "remove the particles inside the hole from the file, or drop 'minus'");
       }
