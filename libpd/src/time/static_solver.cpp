@@ -21,8 +21,8 @@
 // The solve is at the full load: a ramp has no meaning here.
 //
 // Damage (issue 15, event-driven): each step solves equilibrium at the constraints' current values
-// on the unbroken bonds, starting from the current state (a displacement-controlled driver,
-// time/quasi_static.hpp, moves the prescribed values between steps). Then the break event: one
+// on the unbroken bonds (a displacement-controlled driver, time/quasi_static.hpp, moves the
+// prescribed values between steps). Then the break event: one
 // evaluation of the force kernel at that equilibrium applies the kernel's own rule (eq. 10: every
 // bond with s ≥ s0 breaks), and while it broke any bond K is reassembled without them, refactored
 // and equilibrium is solved again at the same load. All bonds beyond s0 break in one event, not
@@ -30,9 +30,12 @@
 // factorisation per bond (the beam breaks 5,400 in its first increment), and breaking every bond
 // beyond s0 of an equilibrium state, re-solving at the same load until none is, is the implicit PD
 // practice (Zaccariotto et al. 2015, Aeronaut. J. 119; Ni et al. 2019). During Newton the kernel
-// must not break bonds (an iterate is not an equilibrium; the jump of the supports overstretches
-// their neighbours for one iterate): the broken flags are restored after every evaluation, so a
-// bond beyond s0 only carries no force in that evaluation and breaks only at the event.
+// must neither break bonds nor drop the force of a bond beyond s0 (an iterate is not an
+// equilibrium): s0 is lifted to no_limit while Newton runs (BreakingSuspended), so the residual
+// is the elastic one of the unbroken bonds. Restoring only the broken flags after each
+// evaluation is not enough: a bond beyond s0 still carries no force in that evaluation, and
+// Newton converged to states whose overstretched bonds carried nothing — measured on rc-beam,
+// one event then broke all 134,557 concrete bonds at 0.25 mm, where ADR breaks 5,300.
 #include "libpd/time/static_solver.hpp"
 
 #include "libpd/core/binary_state.hpp"
@@ -70,6 +73,35 @@ Eigen::SparseMatrix<double> column_major(StaticSystem system, bool symmetric) {
   return Eigen::Map<const Eigen::SparseMatrix<double, Eigen::RowMajor, int>>(
       n, n, nnz, system.row_offsets.data(), system.columns.data(), system.values.data());
 }
+
+/// While alive, no bond of the model breaks in the force kernel: s0 is no_limit, uniform and per
+/// bond; the destructor puts the model's values back.
+class BreakingSuspended {
+public:
+  explicit BreakingSuspended(Model& m) : m_(m), uniform_(m.field.critical_stretch) {
+    if (!m_.effects.damage) {
+      return;
+    }
+    per_bond_ = m_.field.bond_critical_stretch;
+    m_.field.critical_stretch = no_limit;
+    std::fill(m_.field.bond_critical_stretch.begin(), m_.field.bond_critical_stretch.end(),
+              no_limit);
+  }
+  ~BreakingSuspended() {
+    if (!m_.effects.damage) {
+      return;
+    }
+    m_.field.critical_stretch = uniform_;
+    std::copy(per_bond_.begin(), per_bond_.end(), m_.field.bond_critical_stretch.begin());
+  }
+  BreakingSuspended(const BreakingSuspended&) = delete;
+  BreakingSuspended& operator=(const BreakingSuspended&) = delete;
+
+private:
+  Model& m_;
+  double uniform_;
+  std::vector<double> per_bond_;
+};
 
 class StaticSolver final : public Integrator {
 public:
@@ -212,14 +244,11 @@ private:
       apply_constraints(model_, full, 0.0, y, nullptr);
     };
     // Bonds break only at the break events (step), never inside Newton: see the file's heading.
-    const std::vector<std::uint8_t> broken = model_.state.broken;
+    const BreakingSuspended suspended(model_);
     // r = V (b(y) + b_ext) on the unknowns: the force the current state leaves unbalanced.
     auto residual_at = [&](const double* at) {
       forces_.compute(at, st.force.data());
       ++force_evaluations_;
-      if (model_.effects.damage) {
-        std::copy(broken.begin(), broken.end(), model_.state.broken.begin());
-      }
       Eigen::VectorXd r(n);
       for (Eigen::Index k = 0; k < n; ++k) {
         const std::size_t g = d.free_dofs[static_cast<std::size_t>(k)];
@@ -230,11 +259,8 @@ private:
     if (model_.effects.damage) {
       // From the reference state, not from the previous equilibrium: with brittle bonds the
       // equilibrium depends only on the bonds left and the prescribed values, and the linear
-      // solution K⁻¹ f of those bonds is within O(s²) of it. Starting from the previous state
-      // instead, the supports' jump to the new values overstretches their neighbours in the first
-      // iterate; the kernel gives a bond beyond s0 no force, and Newton can then converge to a
-      // state in which such bonds carry nothing and stay beyond s0, which the break event would
-      // make permanent (measured: a bar breaking one load level early).
+      // solution K⁻¹ f of those bonds is within O(s²) of it, whereas from the previous state the
+      // supports' jump to the new values is a one-sided step of Δu over λ.
       for (const std::size_t g : d.free_dofs) {
         y[g] = model_.particles.position[g / 3][g % 3];
       }
