@@ -26,10 +26,13 @@
 // evaluation of the force kernel at that equilibrium applies the kernel's own rule (eq. 10: every
 // bond with s ≥ s0 breaks), and while it broke any bond K is reassembled without them, refactored
 // and equilibrium is solved again at the same load. All bonds beyond s0 break in one event, not
-// the most overstretched one alone: a bond at a time (sequentially linear analysis) would need a
-// factorisation per bond (the beam breaks 5,400 in its first increment), and breaking every bond
-// beyond s0 of an equilibrium state, re-solving at the same load until none is, is the implicit PD
-// practice (Zaccariotto et al. 2015, Aeronaut. J. 119; Ni et al. 2019). During Newton the kernel
+// the most overstretched one alone. The sequentially linear analysis of Ni et al. (2018), which
+// Bhattacharya, Lipton & Diehl (Int. J. Fract. 2023, doi:10.1007/s10704-023-00711-0) call the
+// state of the art for implicit brittle PD, removes one bond (the highest stretch beyond s0) per
+// re-solve; that needs a factorisation per bond (the beam breaks 5,400 in its first increment).
+// Breaking all at once is the cheaper approximation, and it can overshoot: a bond broken in the
+// same event as the one that overloaded it might have unloaded had they broken in turn
+// (QUASI_BRITTLE.md measures what this does on rc-beam). During Newton the kernel
 // must neither break bonds nor drop the force of a bond beyond s0 (an iterate is not an
 // equilibrium): s0 is lifted to no_limit while Newton runs (BreakingSuspended), so the residual
 // is the elastic one of the unbroken bonds. Restoring only the broken flags after each
