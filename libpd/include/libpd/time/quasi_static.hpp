@@ -18,6 +18,9 @@
 // ‖free-dof force‖ ≤ tol · max(‖reactions‖, 5 % of the largest ‖reactions‖ so far) or
 // `max_iterations`. Bonds break during the relaxation, so
 // a crack that propagates unstably does so inside the increment, as under displacement control.
+//
+// Method::static_ instead solves each level with the static solver, which breaks bonds in events
+// at equilibrium (time/static_solver.cpp); the observer sees the same Simulation interface.
 #pragma once
 
 #include "libpd/discretisation/model.hpp"
