@@ -33,6 +33,8 @@ Json run_structure_case(const Context& ctx, const std::string& case_name, bool f
 Json run_structure_sweep_case(const Context& ctx, const std::string& case_name);
 Json run_rc_beam(const Context& ctx);
 Json run_compression_cube(const Context& ctx);
+Json run_rc_beam_static(const Context& ctx);
+Json run_compression_cube_static(const Context& ctx);
 Json run_symmetry_half_full(const Context& ctx);
 Json run_crack_opening(const Context& ctx);
 Json run_fracture_stop(const Context& ctx);

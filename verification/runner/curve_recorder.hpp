@@ -10,6 +10,7 @@
 #include "libpd/time/quasi_static.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <filesystem>
 #include <fmt/format.h>
@@ -73,12 +74,51 @@ inline void record_outcome(Json& j, const quasi_static::Outcome& outcome,
     }
     j["largest_residual"] = worst;
   }
-  j["adr_iterations"] = outcome.iterations;
+  j["iterations"] = outcome.iterations; // ADR iterations, or the static solver's Newton ones
+  std::size_t events = 0;
+  for (const auto& inc : outcome.increments) {
+    events += inc.break_events;
+  }
+  j["break_events"] = events; // static: re-solves after bonds broke
   j["completed"] = outcome.completed;
   if (!outcome.stop_reason.empty()) {
     j["stop_reason"] = outcome.stop_reason;
   }
   j["wall_seconds"] = outcome.wall_seconds;
+}
+
+/// The static curve against the ADR curve of the same increments (issue 15): the peaks (the first
+/// maximum before a drop of `drop`, as the cases define their peak), their difference, and the
+/// largest difference of the two curves up to the later peak, relative to the ADR peak.
+inline Json compare_with_adr(const std::vector<double>& adr, const std::vector<double>& stat,
+                             const std::vector<double>& x, double drop) {
+  auto peak = [&](const std::vector<double>& y) {
+    std::size_t at = 0;
+    for (std::size_t k = 0; k < y.size(); ++k) {
+      if (y[k] > y[at]) {
+        at = k;
+      } else if (y[k] < (1.0 - drop) * y[at]) {
+        break;
+      }
+    }
+    return at;
+  };
+  Json j;
+  if (adr.empty() || stat.empty()) {
+    return j;
+  }
+  const std::size_t pa = peak(adr), ps = peak(stat);
+  double worst = 0;
+  for (std::size_t k = 0; k <= std::max(pa, ps) && k < std::min(adr.size(), stat.size()); ++k) {
+    worst = std::max(worst, std::abs(stat[k] - adr[k]));
+  }
+  j["adr_peak"] = adr[pa];
+  j["adr_peak_at"] = x[pa];
+  j["static_peak"] = stat[ps];
+  j["static_peak_at"] = x[ps];
+  j["peak_difference"] = adr[pa] > 0 ? stat[ps] / adr[pa] - 1.0 : 0.0;
+  j["largest_curve_difference_to_peak"] = adr[pa] > 0 ? worst / adr[pa] : 0.0;
+  return j;
 }
 
 /// A sensitivity run's peak relative to the main run's (0 if the main run has none).

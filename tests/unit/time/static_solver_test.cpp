@@ -1,7 +1,7 @@
 // solver.integrator: static (issue 15): the one sparse solve refined by Newton agrees with
 // dynamic relaxation's steady state, its operator is symmetric under consistent mirror coupling
 // and is the linearisation of the force kernel the dynamic integrators use, and what it cannot
-// do (damage) is refused.
+// do (plasticity) is refused; damage is tested with the load-stepping driver (quasi_static_test).
 #include "libpd/app/run.hpp"
 #include "libpd/io/scene.hpp"
 #include "libpd/kernel/linear_operator.hpp"
@@ -265,11 +265,11 @@ TEST(StaticSolver, RefusesAFactorLargerThanTheMemoryItMayUse) {
   EXPECT_NE(message.find("integrator: adr"), std::string::npos) << message;
 }
 
-TEST(StaticSolver, RefusesDamage) {
+TEST(StaticSolver, RefusesPlasticity) {
   std::string text = cantilever("static", "copy");
   text.replace(text.find("    density: 7850\n"), 18,
-               "    density: 7850\n    critical_stretch: 1e-3\n");
-  text += "effects: [damage]\n";
+               "    density: 7850\n    yield_stretch: 1e-3\n");
+  text += "effects: [plasticity]\n";
   EXPECT_THROW(run(text), std::invalid_argument);
 }
 

@@ -18,6 +18,9 @@
 // ‖free-dof force‖ ≤ tol · max(‖reactions‖, 5 % of the largest ‖reactions‖ so far) or
 // `max_iterations`. Bonds break during the relaxation, so
 // a crack that propagates unstably does so inside the increment, as under displacement control.
+//
+// Method::static_ instead solves each level with the static solver, which breaks bonds in events
+// at equilibrium (time/static_solver.cpp); the observer sees the same Simulation interface.
 #pragma once
 
 #include "libpd/discretisation/model.hpp"
@@ -30,9 +33,17 @@
 
 namespace pd::quasi_static {
 
+/// How each load level is brought to equilibrium.
+enum class Method {
+  adr,    ///< relaxed by ADR (above): bonds break as their stretch passes s0 during relaxation
+  static_ ///< solved by the static solver (time/static_solver.cpp): Newton on the unbroken
+          ///< bonds, then break events (every bond beyond s0) and re-solves at the same level
+};
+
 struct Settings {
   /// Levels of the prescribed displacement, as fractions of the scene's values, increasing.
   std::vector<double> levels;
+  Method method = Method::adr; ///< the iteration settings below are ADR's
   /// The first increment has no predictor: its prescribed values move over this many iterations.
   std::size_t first_ramp_iterations = 200;
   std::size_t max_iterations = 400; ///< per increment, ramp included
@@ -46,11 +57,12 @@ struct Settings {
 };
 
 struct IncrementInfo {
-  int index = 0;       ///< 1-based
-  double fraction = 0; ///< of the full prescribed displacement
-  std::size_t iterations = 0;
+  int index = 0;              ///< 1-based
+  double fraction = 0;        ///< of the full prescribed displacement
+  std::size_t iterations = 0; ///< ADR iterations; static: Newton iterations of the last solve
   double residual = 0; ///< ‖free-dof force‖ / ‖reactions‖ at the end of the increment
   bool converged = false;
+  std::size_t break_events = 0; ///< static: re-solves at this level after bonds broke
 };
 
 struct Outcome {
