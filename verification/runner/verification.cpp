@@ -128,10 +128,13 @@ const std::vector<Case>& all_cases() {
       {"compression-cube",
        "Miranda 5.2.2: C60/75 cube between stiff plates, stress-strain peak vs paper and EC2",
        run_compression_cube},
-      {"rc-beam-static", "rc-beam's curve by the static solver with break events beside ADR's",
+      // (slow): the static beam takes 10 min (Newton on the separated beam), the static cube did
+      // not finish in 16 min (QUASI_BRITTLE.md); the default report leaves them to --full.
+      {"rc-beam-static",
+       "rc-beam's curve by the static solver with break events beside ADR's (slow)",
        run_rc_beam_static},
       {"compression-cube-static",
-       "compression-cube's curve by the static solver with break events beside ADR's",
+       "compression-cube's curve by the static solver with break events beside ADR's (slow)",
        run_compression_cube_static},
       {"symmetry-half-full", "half models on a symmetry plane vs the full models (plate: 0.1 %)",
        run_symmetry_half_full},
