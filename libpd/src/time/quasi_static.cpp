@@ -41,6 +41,31 @@ std::size_t broken_bonds(const Model& model) {
 
 namespace {
 
+/// The prescribed values of the model's constraints, which are then set to zero: the increments
+/// scale the full values themselves.
+std::vector<double> take_prescribed_values(Model& model) {
+  std::vector<double> full(model.constraints.size());
+  for (std::size_t k = 0; k < full.size(); ++k) {
+    full[k] = model.constraints[k].value;
+    model.constraints[k].value = 0;
+  }
+  return full;
+}
+
+/// The scene's solver settings as one increment's solve uses them: `kind`, Δt = 1 (ADR's
+/// fictitious time), no ramp, no end time or steady check (the increment loop decides when an
+/// increment has converged) and no step limit of its own.
+SolverSpec increment_solver(const SolverSpec& scene_solver, IntegratorKind kind) {
+  SolverSpec solver = scene_solver;
+  solver.integrator = kind;
+  solver.dt = 1.0;
+  solver.ramp_time = 0;
+  solver.end_time.reset();
+  solver.steady.enabled = false;
+  solver.max_steps = 1'000'000'000;
+  return solver;
+}
+
 /// Method::static_: one step of the static solver per level (it solves, breaks and re-solves
 /// until no bond is beyond s0), the residual measured as the ADR path measures it.
 Outcome run_static(Model& model, const SolverSpec& scene_solver, const InitialSpec& initial,
@@ -48,18 +73,8 @@ Outcome run_static(Model& model, const SolverSpec& scene_solver, const InitialSp
   using clock = std::chrono::steady_clock;
   const auto start = clock::now();
   Outcome out;
-  std::vector<double> full(model.constraints.size());
-  for (std::size_t k = 0; k < full.size(); ++k) {
-    full[k] = model.constraints[k].value;
-    model.constraints[k].value = 0;
-  }
-  SolverSpec solver = scene_solver;
-  solver.integrator = IntegratorKind::static_solve;
-  solver.dt = 1.0;
-  solver.ramp_time = 0;
-  solver.end_time.reset();
-  solver.steady.enabled = false;
-  Simulation sim(model, solver, initial);
+  const std::vector<double> full = take_prescribed_values(model);
+  Simulation sim(model, increment_solver(scene_solver, IntegratorKind::static_solve), initial);
   const std::size_t ndof = 3 * model.size();
   const std::vector<std::uint8_t> held = held_dofs(model);
   double largest_reactions = 0;
@@ -127,19 +142,8 @@ Outcome run(Model& model, const SolverSpec& scene_solver, const InitialSpec& ini
   using clock = std::chrono::steady_clock;
   const auto start = clock::now();
   Outcome out;
-  std::vector<double> full(model.constraints.size());
-  for (std::size_t k = 0; k < full.size(); ++k) {
-    full[k] = model.constraints[k].value;
-    model.constraints[k].value = 0;
-  }
-  SolverSpec solver = scene_solver;
-  solver.integrator = IntegratorKind::adr;
-  solver.dt = 1.0;
-  solver.ramp_time = 0;
-  solver.end_time.reset();
-  solver.steady.enabled = false;
-  solver.max_steps = 1'000'000'000;
-  Simulation sim(model, solver, initial);
+  const std::vector<double> full = take_prescribed_values(model);
+  Simulation sim(model, increment_solver(scene_solver, IntegratorKind::adr), initial);
 
   const std::size_t ndof = 3 * model.size();
   std::vector<std::uint8_t> constrained(ndof, 0);
