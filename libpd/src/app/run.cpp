@@ -156,6 +156,13 @@ private:
     probes_ = resolve_probes(scene_.probes, model_); // on the whole model, before any split
     out_.particles = model_.size();
     out_.bonds = model_.family.bond_count();
+    for (const LoadSpec& load : scene_.model.loads) {
+      if (load.load.kind == BoxRegionLoad::Kind::point) {
+        out_.point_load_particles[load.name] =
+            load_particles(model_.spec, model_.particles, load, model_.body_particle_count())
+                .size();
+      }
+    }
     split_over_ranks();
     const auto built = clock::now();
     sim_ = std::make_unique<Simulation>(model_, scene_.solver, scene_.initial);

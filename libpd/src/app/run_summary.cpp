@@ -83,11 +83,8 @@ Json run_summary(const Scene& scene, const Simulation& sim, const RunOutcome& ou
       cj[scene.model.cracks[c].name]["bonds_not_created"] = model.bonds_cut_by_crack[c];
     }
   }
-  for (const LoadSpec& load : scene.model.loads) {
-    if (load.load.kind == BoxRegionLoad::Kind::point) {
-      j["point_loads"][load.name]["particles"] =
-          load_particles(model.spec, model.particles, load, model.body_particle_count()).size();
-    }
+  for (const auto& [name, count] : out.point_load_particles) {
+    j["point_loads"][name]["particles"] = count;
   }
   if (scene.stop_when.enabled()) {
     Json& sj = j["stop_when"];

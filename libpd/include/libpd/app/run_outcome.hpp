@@ -30,6 +30,8 @@ struct RunOutcome {
   /// copies, the model's bytes, the peak resident bytes and the halo bytes sent per step
   /// (summary.json `distribution`; null in one process).
   Json distribution;
+  /// Per point load: how many particles share it, counted on the whole model before any split.
+  std::map<std::string, std::size_t> point_load_particles;
   std::map<std::string, double> probes;
   ProbeHistory history;
   Json summary;
