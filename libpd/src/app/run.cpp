@@ -202,7 +202,6 @@ private:
     d["partition"] = std::string(name_of(options_.partition));
     d["cut_bonds"] = quality.cut_bonds;
     d["owned_particles"] = Json::array_of(quality.owned);
-    d["halo_particles"] = Json::array_of(quality.halo);
   }
 
   // Per rank, what the split costs: the model's bytes, the peak resident bytes and the halo
@@ -213,18 +212,21 @@ private:
     }
     const double steps = std::max<double>(
         1.0, static_cast<double>(out_.result.steps - out_.restarted_from_step.value_or(0)));
+    const auto& owned = model_.ownership.owned;
+    const auto halo = static_cast<double>(std::count(owned.begin(), owned.end(), 0));
     const std::string mine =
-        fmt::format("{} {} {} {}", model_.memory_bytes(), peak_resident_bytes(),
-                    static_cast<double>(comm().halo_bytes()) / steps, comm().halo_seconds());
+        fmt::format("{} {} {} {} {}", model_.memory_bytes(), peak_resident_bytes(),
+                    static_cast<double>(comm().halo_bytes()) / steps, comm().halo_seconds(), halo);
     const std::vector<std::string> all = comm().gather(mine);
-    std::vector<double> model_bytes, peak_bytes, halo_bytes, halo_seconds;
+    std::vector<double> model_bytes, peak_bytes, halo_bytes, halo_seconds, halo_particles;
     for (const std::string& line : all) {
-      double m = 0, p = 0, h = 0, s = 0;
-      if (std::sscanf(line.c_str(), "%lf %lf %lf %lf", &m, &p, &h, &s) == 4) {
+      double m = 0, p = 0, h = 0, s = 0, n = 0;
+      if (std::sscanf(line.c_str(), "%lf %lf %lf %lf %lf", &m, &p, &h, &s, &n) == 5) {
         model_bytes.push_back(m);
         peak_bytes.push_back(p);
         halo_bytes.push_back(h);
         halo_seconds.push_back(s);
+        halo_particles.push_back(n);
       }
     }
     Json& d = out_.distribution;
@@ -232,6 +234,7 @@ private:
     d["peak_memory_bytes"] = Json::array_of(peak_bytes);
     d["halo_bytes_per_step"] = Json::array_of(halo_bytes);
     d["halo_exchange_seconds"] = Json::array_of(halo_seconds);
+    d["halo_particles"] = Json::array_of(halo_particles); // held copies of others' particles
   }
 
   const Communicator& comm() const {

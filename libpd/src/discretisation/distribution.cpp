@@ -233,7 +233,6 @@ PartitionQuality partition_quality(const Model& global, const std::vector<std::i
                                    int ranks) {
   PartitionQuality q;
   q.owned.assign(static_cast<std::size_t>(ranks), 0);
-  q.halo.assign(static_cast<std::size_t>(ranks), 0);
   for (std::size_t i = 0; i < global.size(); ++i) {
     ++q.owned[static_cast<std::size_t>(owner[i])];
     for (std::size_t k = global.family.offsets[i]; k < global.family.offsets[i + 1]; ++k) {
@@ -241,13 +240,6 @@ PartitionQuality partition_quality(const Model& global, const std::vector<std::i
       if (j > i && owner[j] != owner[i]) {
         ++q.cut_bonds;
       }
-    }
-  }
-  const Dependencies deps(global);
-  for (int r = 0; r < ranks; ++r) {
-    const LocalSet s = local_set(global, deps, owner, r);
-    for (std::size_t i = 0; i < global.size(); ++i) {
-      q.halo[static_cast<std::size_t>(r)] += s.held[i] != 0 && owner[i] != r ? 1 : 0;
     }
   }
   return q;

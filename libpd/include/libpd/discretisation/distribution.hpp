@@ -42,12 +42,11 @@ std::vector<std::int32_t> partition_particles(const Model& global, const Communi
 Model localise(const Model& global, const std::vector<std::int32_t>& owner, int rank, int ranks,
                const Communicator& comm);
 
-/// How good a split is: bonds between particles of different owners, particles per rank and
-/// halo copies per rank.
+/// How good a split is: bonds between particles of different owners and particles per rank
+/// (each rank's halo is what localise kept beyond its own: Ownership).
 struct PartitionQuality {
   std::size_t cut_bonds = 0;
   std::vector<std::size_t> owned;
-  std::vector<std::size_t> halo;
 };
 PartitionQuality partition_quality(const Model& global, const std::vector<std::int32_t>& owner,
                                    int ranks);
