@@ -393,11 +393,8 @@ private:
   // A checkpoint: the simulation's state with the run's record so far (history, VTU frames).
   void save_checkpoint(const Simulation& s) {
     if (folder_) {
-      folder_->add(checkpoints_->file()); // rank 0's piece; the other ranks' beside it
-      for (int r = 1; r < comm().size(); ++r) {
-        std::string name = checkpoints_->file().filename().string();
-        name.replace(name.rfind(fmt::format("-r{:04d}of", 0)), 6, fmt::format("-r{:04d}", r));
-        folder_->add(checkpoints_->file().parent_path() / name);
+      for (int r = 0; r < comm().size(); ++r) { // every rank's piece (rank 0 keeps the list)
+        folder_->add(rank_file(checkpoint_base_path(options_), r, comm().size()));
       }
     }
     checkpoints_->save(fingerprint(), s, out_.history, output_->frames());

@@ -82,22 +82,30 @@ void restore_history(CheckpointReader& r, std::size_t columns, ProbeHistory& his
 
 } // namespace
 
-std::filesystem::path rank_file(const std::filesystem::path& path, const Communicator& comm) {
-  if (comm.size() == 1 || path.empty()) {
+std::filesystem::path rank_file(const std::filesystem::path& path, int rank, int ranks) {
+  if (ranks == 1 || path.empty()) {
     return path;
   }
   std::filesystem::path out = path;
-  out.replace_filename(fmt::format("{}-r{:04d}of{:04d}{}", path.stem().string(), comm.rank(),
-                                   comm.size(), path.extension().string()));
+  out.replace_filename(fmt::format("{}-r{:04d}of{:04d}{}", path.stem().string(), rank, ranks,
+                                   path.extension().string()));
   return out;
 }
 
+std::filesystem::path rank_file(const std::filesystem::path& path, const Communicator& comm) {
+  return rank_file(path, comm.rank(), comm.size());
+}
+
+std::filesystem::path checkpoint_base_path(const RunOptions& options) {
+  if (!options.checkpoint.empty()) {
+    return options.checkpoint;
+  }
+  return options.output_dir.empty() ? std::filesystem::path{}
+                                    : options.output_dir / "checkpoint.pdcp";
+}
+
 std::filesystem::path checkpoint_path(const RunOptions& options) {
-  const std::filesystem::path base = !options.checkpoint.empty() ? options.checkpoint
-                                     : options.output_dir.empty()
-                                         ? std::filesystem::path{}
-                                         : options.output_dir / "checkpoint.pdcp";
-  return rank_file(base,
+  return rank_file(checkpoint_base_path(options),
                    options.communicator != nullptr ? *options.communicator : serial_communicator());
 }
 

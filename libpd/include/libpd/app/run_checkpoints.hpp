@@ -29,7 +29,11 @@ CheckpointFingerprint run_fingerprint(const Scene& scene, const Simulation& sim,
 std::filesystem::path checkpoint_path(const RunOptions& options);
 /// A run split over N > 1 ranks keeps one checkpoint file per rank: NAME-rRRRRofNNNN.EXT beside
 /// the path given (each written atomically; a restart needs the same rank count).
+std::filesystem::path rank_file(const std::filesystem::path& path, int rank, int ranks);
 std::filesystem::path rank_file(const std::filesystem::path& path, const Communicator& comm);
+/// The path asked for (RunOptions::checkpoint, or output_dir/checkpoint.pdcp), before any rank
+/// suffix.
+std::filesystem::path checkpoint_base_path(const RunOptions& options);
 
 class CheckpointPolicy {
 public:
