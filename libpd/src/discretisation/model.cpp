@@ -163,9 +163,11 @@ std::vector<Constraint> support_constraints(const ModelSpec& spec, const Particl
       continue;
     }
     for (std::uint32_t i : members) {
+      const Vec3 value =
+          sup.displacement_field ? sup.displacement_field(particles.position[i]) : sup.displacement;
       for (std::uint8_t c = 0; c < 3; ++c) {
         if (sup.fixed[c] || sup.prescribed[c]) {
-          constraints.push_back({{i, c, sup.prescribed[c] ? sup.displacement[c] : 0.0}, s});
+          constraints.push_back({{i, c, sup.prescribed[c] ? value[c] : 0.0}, s});
         }
       }
     }

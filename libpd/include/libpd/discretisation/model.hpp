@@ -15,6 +15,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -70,6 +71,11 @@ struct SupportSpec {
   std::array<bool, 3> fixed{false, false, false};
   std::array<bool, 3> prescribed{false, false, false};
   Vec3 displacement{0, 0, 0};
+  /// Set by code, not by a scene file: the prescribed displacement at each particle's reference
+  /// position, taking the place of the uniform `displacement` in the prescribed components. A
+  /// verification case uses it to hold a boundary zone at a closed-form field (the elliptical
+  /// disk's eq. 116 of Olsson et al.); the load ramp scales it like `displacement`.
+  std::function<Vec3(const Vec3&)> displacement_field;
   /// Clamped face without a rigid block: each particle of the support takes the displacement of
   /// its mirror image across the planes x_a = mirror_at[a] (every a with mirror[a]), negated once
   /// per plane. The displacement then vanishes on the face with the strain continuous across it,
