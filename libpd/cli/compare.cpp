@@ -68,7 +68,9 @@ Command add_compare_command(CLI::App& app) {
       ->check(CLI::IsMember({"dynamic", "quasistatic"}));
   cmd->add_option("-o,--output", a->out_file, "also write the rows to this .jsonl file");
   cmd->add_option("--scenes", a->scenes_dir, "folder with the shipped scenes");
-  cmd->add_flag("--quick", a->quick, "fewer time steps and a coarser reference");
+  cmd->add_flag("--quick", a->quick,
+                "dynamic: one period and a coarser reference; quasistatic: twice the spacing, "
+                "no adaptive Dormand–Prince");
   add_threads_option(*cmd, a->threads);
   return {cmd, [a] { return compare(*a); }};
 }

@@ -105,7 +105,9 @@ def quasistatic_block(page: Page, rows: list[dict]) -> str:
     ax.set_xlabel("wall time to steady state (s)")
     ax.invert_yaxis()
     ax.set_xlim(0, max(walls + [1]) * 1.45)
-    ax.set_title("clamped beam: time to steady state", fontsize=10)
+    spacing = next((r["spacing"] for r in rows if r.get("spacing")), None)
+    at = f" at λ = {spacing:g} m" if spacing else ""
+    ax.set_title(f"clamped beam{at}: time to steady state", fontsize=10)
     img = page.savefig(fig, "integrators-quasistatic.png")
     fastest = min(range(len(walls)), key=lambda i: walls[i]) if walls else None
     reading = ""
@@ -118,6 +120,9 @@ def quasistatic_block(page: Page, rows: list[dict]) -> str:
         if ref is not None and walls[fastest] > 0:
             reading += f", {walls[ref] / walls[fastest]:.2g}× faster than damped Euler"
         reading += ")."
+    if spacing:
+        reading += (f" Clamped beam at λ = {spacing:g} m (the default report's `pd compare quasistatic "
+                    "--quick` takes twice the paper's spacing; --full runs it at the paper's).")
     return (f'<img src="{img}" alt="time to steady state">' +
             (f'<p class="reading">{esc(reading)}</p>' if reading else "") +
             table(["integrator", "Δt (s)", "steps", "force evaluations", "wall (s)",

@@ -468,7 +468,7 @@ def stability_stage(ctx: Ctx, scenes: list[str]) -> Stage:
 def compare_stage(ctx: Ctx, which: str) -> Stage:
     out_file = ctx.work / "compare" / f"{which}.jsonl"
     cmd = [str(ctx.pd), "compare", which, "-o", str(out_file)]
-    if not ctx.full and which == "dynamic":
+    if not ctx.full:
         cmd.append("--quick")
 
     def fn(ctx: Ctx, st: Stage) -> dict:

@@ -319,20 +319,6 @@ private:
   std::map<std::array<long long, 3>, std::size_t> particle_;
 };
 
-/// Apply a different spacing (CI variant, sweeps): the load layers follow the top particle layer.
-void set_spacing(Scene& scene, double spacing) {
-  const double old = scene.model.lattice.spacing;
-  const int vertical = scene.model.dimension.dim - 1;
-  scene.model.lattice.spacing = spacing;
-  for (LoadSpec& l : scene.model.loads) {
-    for (Box& b : l.load.region.boxes) {
-      if (b.hi[vertical] - b.lo[vertical] <= old * (1 + 1e-9)) { // one top layer: keep it one
-        b.lo[vertical] = b.hi[vertical] - 0.5 * spacing;
-      }
-    }
-  }
-}
-
 Json run_once(const Scene& scene, const StructureCase& c, const Context& ctx,
               const std::string& tag, std::map<std::string, double>& values,
               std::map<std::string, double>& line_error, RunOutcome& outcome,
@@ -717,6 +703,19 @@ Json run_structure_sweep(const Context& ctx, const std::string& case_name) {
 }
 
 } // namespace
+
+void set_spacing(Scene& scene, double spacing) {
+  const double old = scene.model.lattice.spacing;
+  const int vertical = scene.model.dimension.dim - 1;
+  scene.model.lattice.spacing = spacing;
+  for (LoadSpec& l : scene.model.loads) {
+    for (Box& b : l.load.region.boxes) {
+      if (b.hi[vertical] - b.lo[vertical] <= old * (1 + 1e-9)) { // one top layer: keep it one
+        b.lo[vertical] = b.hi[vertical] - 0.5 * spacing;
+      }
+    }
+  }
+}
 
 Json run_structure_case(const Context& ctx, const std::string& case_name, bool fast) {
   return run_structure(ctx, case_name, fast);

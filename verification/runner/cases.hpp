@@ -1,6 +1,7 @@
 // The case functions registered in verification.cpp; one file per case under cases/.
 #pragma once
 
+#include "libpd/io/scene.hpp"
 #include "verification.hpp"
 
 namespace pd::verification {
@@ -31,6 +32,9 @@ Json run_clamped_beam_2d_sweep(const Context& ctx);
 /// (`fast`: the case's CI spacing, regression and gates, no relaxation rerun), or its sweep.
 Json run_structure_case(const Context& ctx, const std::string& case_name, bool fast);
 Json run_structure_sweep_case(const Context& ctx, const std::string& case_name);
+/// A structural scene at another spacing (CI variants, sweeps, `pd compare quasistatic --quick`):
+/// a load on the top particle layer stays on the top layer.
+void set_spacing(Scene& scene, double spacing);
 Json run_rc_beam(const Context& ctx);
 Json run_compression_cube(const Context& ctx);
 Json run_rc_beam_static(const Context& ctx);
