@@ -1,4 +1,5 @@
-// Particle files: a body given as a list of particles (discretisation/point_cloud.hpp).
+// Particle files: a body given as a list of particles (discretisation/point_cloud.hpp), in CSV
+// or in VTU (ParaView's format: the points and their point data arrays of the same names).
 //
 // CSV with a header row naming the columns, in any order (unknown columns are ignored):
 //   x, y[, z]          position [m] (z required in 3D, not read in 2D)
@@ -30,7 +31,12 @@ inline constexpr std::size_t max_particle_file_bytes = std::size_t{1} << 30;
 /// Parse the CSV text of a particle file named `name` (for messages) in dimension `dim`.
 PointCloud parse_particle_csv(std::string_view text, const std::string& name, int dim);
 
-/// Read and parse the file at `path`.
-PointCloud read_particle_csv(const std::string& path, int dim);
+/// Parse the VTU text of a particle file: the first piece's points, and its point data arrays
+/// `volume` (or `mass` and `density`) and optionally `h`, ascii or inline binary (base64, not
+/// compressed); the same checks as CSV, a problem named "FILE: point K: what" (K from 1).
+PointCloud parse_particle_vtu(std::string_view text, const std::string& name, int dim);
+
+/// Read and parse the file at `path`: CSV (.csv) or VTU (.vtu), by its extension.
+PointCloud read_particle_file(const std::string& path, int dim);
 
 } // namespace pd

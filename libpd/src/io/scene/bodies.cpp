@@ -99,8 +99,8 @@ constexpr Key body_keys[] = {
      .section = &shape_section},
     {.name = "particles",
      .type = Type::string,
-     .doc = "instead of box: a CSV file of particles (x, y[, z], volume or mass and density, "
-            "optional h), relative to the scene file; virtual fibres only",
+     .doc = "instead of box: a particle file, CSV (.csv) or VTU (.vtu): x, y[, z], volume or "
+            "mass and density, optional h; relative to the scene file; virtual fibres only",
      .example = "plate.csv",
      .need = Need::one_of,
      .group = 1,
@@ -125,7 +125,7 @@ void read_particle_body(Reader& r, const Fields& f, BodySpec& body, Marks& marks
     path = std::filesystem::path(r.file()).parent_path() / path;
   }
   try {
-    body.points = std::make_shared<const PointCloud>(read_particle_csv(path.string(), r.dim));
+    body.points = std::make_shared<const PointCloud>(read_particle_file(path.string(), r.dim));
   } catch (const ParticleFileError& error) {
     r.fail(e->at(), error.what(), "fix the file (see SCENE_FORMAT.md, particle files)");
   }
