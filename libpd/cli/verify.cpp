@@ -1,4 +1,4 @@
-// pd verify [CASE...] [-o DIR] [--list] [--sweep] [--scenes DIR] [--threads N]
+// pd verify [CASE...] [-o DIR] [--list] [--sweep [--quick]] [--scenes DIR] [--threads N]
 // pd verify SCENE.yaml... [--fe-levels N] [--fe-coarse] [--gate FRACTION]
 // Verification cases with their gates: CASE.json in DIR for each, exit code 2 if a gate fails.
 // A scene file instead of a case name runs the scene beside its FE reference (pd-fem --scene).
@@ -25,6 +25,7 @@ struct VerifyArgs {
   std::string out_dir = "verification-out";
   bool list = false;
   bool sweep = false;
+  bool quick = false;
   std::string scenes_dir;
   int threads = 0;
   verification::SceneVerifyOptions scene;
@@ -98,6 +99,7 @@ int verify(const VerifyArgs& a) {
   ctx.scenes_dir = a.scenes_dir.empty() ? verification::default_scenes_dir()
                                         : std::filesystem::path(a.scenes_dir);
   ctx.output_dir = a.out_dir;
+  ctx.quick_sweep = a.quick;
   ctx.progress = ::isatty(STDERR_FILENO) != 0;
   if (!a.cases.empty() && std::all_of(a.cases.begin(), a.cases.end(), is_scene_file)) {
     VerifyArgs scene_args = a;
@@ -145,6 +147,9 @@ Command add_verify_command(CLI::App& app) {
                   "case names (default: all), or scene files (.yaml) to verify against FE");
   cmd->add_option("-o,--output", a->out_dir, "output folder")->capture_default_str();
   cmd->add_flag("--list", a->list, "list the cases");
+  cmd->add_flag("--quick", a->quick,
+                "with --sweep: the case file's quick_sweep lists where it has them (what the "
+                "default report runs)");
   cmd->add_flag("--sweep", a->sweep,
                 "run the accuracy-vs-time sweep of each named case (the case CASE-sweep): one "
                 "JSON row per run in DIR/CASE-sweep.jsonl");

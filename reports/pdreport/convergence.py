@@ -190,11 +190,13 @@ def section_parts(page: Page) -> str:
     why = ""
     if missing:
         why = (f'<p class="note">No sweep in this report for {esc(", ".join(missing))}: the default '
-               "report sweeps the beams, <code>--full</code> every case whose case file has a "
-               "<code>sweep:</code> section.</p>")
+               "report runs the three structures' <code>quick_sweep:</code> lists, "
+               "<code>--full</code> the complete <code>sweep:</code> of every case file that has one.</p>")
     return ('<h3 id="convergence">Convergence in λ (default treatment)</h3>'
-            '<p class="note">From each case\'s spacing sweep (<code>pd verify CASE-sweep</code>, the '
-            "baseline and the <code>spacing</code> rows), everything else as the scene has it. "
+            '<p class="note">From each case\'s spacing sweep (<code>pd verify --sweep CASE</code>, '
+            "the baseline and the <code>spacing</code> rows; the default report runs the case "
+            "file's <code>quick_sweep:</code> lists, <code>--full</code> its <code>sweep:</code>), "
+            "everything else as the scene has it. "
             "The observed order p is the slope of log|error| against log λ, fitted only over the "
             "consecutive levels where |error| decreases monotonically as λ shrinks, and only over "
             "levels whose |error| is above the FE solution's own relative error estimate (dotted "

@@ -278,7 +278,10 @@ def fem_stage(ctx: Ctx, problem: str, cases: list[Case]) -> Stage:
     return Stage(f"fem:{problem}", "fem", f"deal.II reference {problem}", [cmd],
                  [exe, prm, gold] + [gold.parent / line.fe_csv for line in fe_lines] + [c.path for c in cases], fn,
                  default_seconds=(90 if problem.startswith("plate") else 15) if ctx.full
-                 else (15 if problem.startswith("plate") else 5))
+                 else (15 if problem.startswith("plate") else 5),
+                 # The coarse checks are small: one thread each, two side by side. The full runs
+                 # keep the machine (deal.II's assembly uses every core).
+                 env={} if ctx.full else {"DEAL_II_NUM_THREADS": "1"}, parallel=not ctx.full)
 
 
 # ---- verification cases ------------------------------------------------------------------------
@@ -392,9 +395,9 @@ def sweep_stage(ctx: Ctx, case: str, listed: set[str]) -> Stage:
     quick = not ctx.full
     if "--sweep" in help_text:
         cmd = [str(ctx.pd), "verify", "--sweep", case, "-o", str(work)]
-        if ctx.full and "--full" in help_text:
-            cmd.append("--full")
-        quick = False  # the option decides its own extent
+        if not ctx.full and "--quick" in help_text:
+            cmd.append("--quick")  # the case file's quick_sweep lists
+        quick = False  # pd decides the extent
     elif f"{case}-sweep" in listed:
         cmd = [str(ctx.pd), "verify", f"{case}-sweep", "-o", str(work)]
         if quick:
@@ -437,8 +440,10 @@ def sweep_stage(ctx: Ctx, case: str, listed: set[str]) -> Stage:
         drop_bulky(work)
         return {"case": case, "command": cmd, "reduced": quick, "rows": rows, **extra}
 
+    # Sweeps of the static solver run on one core each, two sweeps side by side.
     return Stage(f"sweep:{case}", "sweep", f"accuracy-vs-time sweep of {case}", [cmd],
-                 [ctx.pd] + scene_inputs(ctx), fn, default_seconds=1800 if ctx.full else 240)
+                 [ctx.pd] + scene_inputs(ctx), fn, default_seconds=1800 if ctx.full else 60,
+                 parallel=True)
 
 
 # ---- stability ---------------------------------------------------------------------------------
@@ -459,8 +464,10 @@ def stability_stage(ctx: Ctx, scenes: list[str]) -> Stage:
             raise StageFailed("`pd stability --json` returned no rows")
         return {"rows": rows}
 
+    # Stability and the two integrator comparisons run on one core each (a 1D bar, a coarse beam
+    # below the threading threshold): two at a time.
     return Stage("stability", "stability", "stable time step per integrator", [cmd],
-                 [ctx.pd] + paths, fn, default_seconds=240 if ctx.full else 60)
+                 [ctx.pd] + paths, fn, default_seconds=240 if ctx.full else 60, parallel=not ctx.full)
 
 
 # ---- integrator comparison ---------------------------------------------------------------------
@@ -490,7 +497,7 @@ def compare_stage(ctx: Ctx, which: str) -> Stage:
     return Stage(f"compare:{which}", "compare", f"integrator comparison ({which})", [cmd],
                  [ctx.pd] + scene_inputs(ctx), fn,
                  default_seconds=(90 if which == "dynamic" else 180) if ctx.full
-                 else (30 if which == "dynamic" else 150))
+                 else (30 if which == "dynamic" else 20), parallel=not ctx.full)
 
 
 # ---- benchmarks --------------------------------------------------------------------------------

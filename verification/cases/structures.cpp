@@ -121,7 +121,9 @@ CorrectionPair correction_pair(const std::string& text, const std::filesystem::p
   return {text, *surface, *volume};
 }
 
-StructureCase load_case(const std::filesystem::path& file) {
+/// `quick`: the sweep is the file's `quick_sweep:` block if it has one (what the default report
+/// runs), else its `sweep:`.
+StructureCase load_case(const std::filesystem::path& file, bool quick = false) {
   YAML::Node root;
   try {
     root = YAML::LoadFile(file.string());
@@ -156,7 +158,7 @@ StructureCase load_case(const std::filesystem::path& file) {
       c.fast_regression_tolerance = fast["regression_tolerance"].as<double>(0.0);
       c.fast_gate = read_map(fast["gate"]);
     }
-    if (const auto sw = root["sweep"]) {
+    if (const auto sw = quick && root["quick_sweep"] ? root["quick_sweep"] : root["sweep"]) {
       c.sweep_spacing = sw["spacing"].as<std::vector<double>>(std::vector<double>{});
       c.sweep_horizon_factor = sw["horizon_factor"].as<std::vector<double>>(std::vector<double>{});
       c.sweep_stretch = sw["stretch"].as<std::vector<std::string>>(std::vector<std::string>{});
@@ -627,8 +629,8 @@ std::vector<SweepVariant> sweep_variants(const Scene& base, const StructureCase&
 
 /// One row per run: each knob varied on its own around the scene's settings (the baseline).
 Json run_structure_sweep(const Context& ctx, const std::string& case_name) {
-  const StructureCase c =
-      load_case(ctx.scenes_dir.parent_path() / "cases" / (case_name + ".case.yaml"));
+  const StructureCase c = load_case(
+      ctx.scenes_dir.parent_path() / "cases" / (case_name + ".case.yaml"), ctx.quick_sweep);
   const Scene base = load_scene((ctx.scenes_dir / c.scene).string());
   const YAML::Node fe = load_fe_summary(c.fe_reference);
   const std::vector<SweepVariant> variants = sweep_variants(base, c);
@@ -691,6 +693,7 @@ Json run_structure_sweep(const Context& ctx, const std::string& case_name) {
   out["case"] = c.name + "-sweep";
   out["quantity"] = "error vs FE and wall time for each knob (rows in " + c.name + "-sweep.jsonl)";
   out["rows"] = rows;
+  out["extent"] = ctx.quick_sweep ? "quick_sweep (pd verify --sweep --quick)" : "sweep";
   if (spacing_error.size() >= 2) {
     const ObservedOrder order = observed_order(spacing_error);
     out["observed_order_in_spacing"] = order.order ? Json(*order.order) : Json(nullptr);
