@@ -174,7 +174,7 @@ ExtrapolatedParticles extrapolation_ties(int dim, double spacing, const std::vec
                                          const std::vector<SymmetryPlane>& symmetry) {
   ExtrapolatedParticles ties;
   const double tolerance = 1e-6 * spacing;
-  const double fit_radius = std::sqrt(6.0) * spacing;
+  const double fit_radius = ghost_fit_radius * spacing;
   const auto free_family = [&](std::size_t i, std::vector<std::uint32_t>& out) {
     for (std::size_t k = family.offsets[i]; k < family.offsets[i + 1]; ++k) {
       if (!dependent[family.neighbour[k]]) {
@@ -213,12 +213,10 @@ ExtrapolatedParticles extrapolation_ties(int dim, double spacing, const std::vec
         nearest = j;
       }
     }
-    // The fit is local: the free particles within √6 λ of the nearest (all of its family for a
-    // horizon shorter than that). √6 λ is the smallest radius that gives a particle in a corner
-    // of a box enough neighbours for the whole quadratic (3D: 20 for 10 terms, three positions
-    // along each axis; 2D: 8 for 6), and the smaller the cloud, the fewer sources each dependant
-    // couples and the less the static solver's factor fills in (about 3× fewer than with δ at
-    // m = 2√3).
+    // The fit is local: the free particles within the fit radius of the nearest (all of its
+    // family for a horizon shorter than that). The smaller the cloud, the fewer sources each
+    // dependant couples and the less the static solver's factor fills in (√6 λ: about 3× fewer
+    // than with δ at m = 2√3).
     sources.assign(1, nearest);
     for (std::size_t k = family.offsets[nearest]; k < family.offsets[nearest + 1]; ++k) {
       if (!dependent[family.neighbour[k]] &&
@@ -289,6 +287,80 @@ ExtrapolatedParticles extrapolation_ties(int dim, double spacing, const std::vec
     ties.negated.clear();
   }
   return ties;
+}
+
+ExtrapolatedParticles refit_within(int dim, double spacing, const std::vector<Vec3>& position,
+                                   const ExtrapolatedParticles& ties,
+                                   const std::vector<ClampPlane>& planes,
+                                   const std::vector<SymmetryPlane>& symmetry, double fit_radius) {
+  const double tolerance = 1e-6 * spacing;
+  const double reach2 = fit_radius * fit_radius * spacing * spacing * (1 + 1e-9);
+  const auto distance2 = [](const Vec3& a, const Vec3& b) {
+    double d2 = 0;
+    for (std::size_t c = 0; c < 3; ++c) {
+      d2 += (a[c] - b[c]) * (a[c] - b[c]);
+    }
+    return d2;
+  };
+  ExtrapolatedParticles out;
+  std::vector<Vec3> datum;       // where each term's source is seen from (its symmetry image)
+  std::vector<Vec3> kept;        // the data within the radius
+  std::vector<std::size_t> term; // and their terms
+  for (std::size_t d = 0; d < ties.size(); ++d) {
+    const Vec3& p = position[ties.particle[d]];
+    out.particle.push_back(ties.particle[d]);
+    datum.clear();
+    std::size_t nearest = ties.offsets[d];
+    for (std::size_t t = ties.offsets[d]; t < ties.offsets[d + 1]; ++t) {
+      Vec3 x = position[ties.source[t]];
+      for (const SymmetryPlane& s : symmetry) {
+        const auto axis = static_cast<std::size_t>(s.axis);
+        if (ties.sign(t, axis) < 0) {
+          x[axis] = 2 * s.at - x[axis];
+        }
+      }
+      datum.push_back(x);
+      if (distance2(x, p) <
+          distance2(datum[nearest - ties.offsets[d]], p) - tolerance * tolerance) {
+        nearest = t;
+      }
+    }
+    kept.clear();
+    term.clear();
+    for (std::size_t t = ties.offsets[d]; t < ties.offsets[d + 1]; ++t) {
+      const Vec3& x = datum[t - ties.offsets[d]];
+      if (distance2(x, datum[nearest - ties.offsets[d]]) <= reach2) {
+        kept.push_back(x);
+        term.push_back(t);
+      }
+    }
+    std::vector<ClampPlane> behind;
+    for (const ClampPlane& c : planes) {
+      if (c.behind(p, tolerance)) {
+        behind.push_back(c);
+      }
+    }
+    std::vector<std::uint32_t> data(kept.size());
+    for (std::size_t k = 0; k < data.size(); ++k) {
+      data[k] = static_cast<std::uint32_t>(k);
+    }
+    if (!data.empty()) {
+      const Basis basis(dim, spacing, p, behind, kept, data);
+      const std::vector<double> a = fit_weights(basis, p, kept, data);
+      for (std::size_t k = 0; k < data.size(); ++k) {
+        if (a[k] != 0.0) {
+          out.source.push_back(ties.source[term[k]]);
+          out.coefficient.push_back(a[k]);
+          out.negated.push_back(ties.negated.empty() ? 0 : ties.negated[term[k]]);
+        }
+      }
+    }
+    out.offsets.push_back(out.source.size());
+  }
+  if (ties.negated.empty()) {
+    out.negated.clear();
+  }
+  return out;
 }
 
 } // namespace pd

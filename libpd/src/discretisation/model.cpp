@@ -741,4 +741,10 @@ Model build_model(const ModelSpec& spec, ParticleSet particles) {
   return m;
 }
 
+ExtrapolatedParticles refit_extrapolation(const Model& m, double fit_radius) {
+  return refit_within(m.spec.dimension.dim, m.spec.lattice.spacing, m.particles.position,
+                      m.extrapolated, clamp_planes(m.spec),
+                      symmetry_planes(m.spec, m.particles, m.body_particle_count()), fit_radius);
+}
+
 } // namespace pd

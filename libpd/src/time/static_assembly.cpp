@@ -34,7 +34,7 @@ bool DofMap::every_dependant_folds() const {
   return true;
 }
 
-DofMap map_dofs(const Model& m) {
+DofMap map_dofs(const Model& m, const ExtrapolatedParticles& e) {
   const std::size_t ndof = 3 * m.size();
   DofMap d;
   d.free_index.assign(ndof, DofMap::none);
@@ -60,7 +60,6 @@ DofMap map_dofs(const Model& m) {
       d.prescribed[g] = c.value;
     }
   }
-  const ExtrapolatedParticles& e = m.extrapolated;
   for (std::size_t k = 0; k < e.size(); ++k) {
     for (std::size_t a = 0; a < static_cast<std::size_t>(dim); ++a) {
       const std::size_t g = 3 * e.particle[k] + a;

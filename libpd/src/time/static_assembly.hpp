@@ -32,7 +32,12 @@ struct DofMap {
   bool every_dependant_folds() const;
 };
 
-DofMap map_dofs(const Model& m);
+/// The model's dofs, its extrapolated particles taking their terms from `extrapolated`
+/// (m.extrapolated, or a refit of it: refit_extrapolation).
+DofMap map_dofs(const Model& m, const ExtrapolatedParticles& extrapolated);
+inline DofMap map_dofs(const Model& m) {
+  return map_dofs(m, m.extrapolated);
+}
 
 /// Which entries of each row the assembly keeps.
 enum class RowPart {

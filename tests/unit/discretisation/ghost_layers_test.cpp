@@ -278,3 +278,43 @@ TEST(GhostLayers, LoadsAndSupportsSeeOnlyTheBody) {
 }
 
 } // namespace
+
+// The static solver's preconditioner (time/static_solver.cpp) refits the ghosts from a smaller
+// cloud. At the full radius the refit is the model's own extrapolation; at 1.5 λ each ghost has
+// fewer sources, and the fit still reproduces every linear field (two positions along each axis
+// within 1.5 λ of a face particle), so the preconditioner keeps uniform strains exact.
+TEST(GhostLayers, RefitAtTheFullRadiusIsTheFitAndSmallerOnesStayLinearExact) {
+  const pd::Model m =
+      pd::build_model(box_spec(3, pd::VolumeCorrection::gradient, 2.0 * std::sqrt(3.0)));
+  const pd::ExtrapolatedParticles& e = m.extrapolated;
+  ASSERT_GT(e.size(), 0u);
+  const pd::ExtrapolatedParticles same = pd::refit_extrapolation(m, pd::ghost_fit_radius);
+  ASSERT_EQ(same.offsets, e.offsets);
+  ASSERT_EQ(same.source, e.source);
+  for (std::size_t t = 0; t < e.coefficient.size(); ++t) {
+    EXPECT_NEAR(same.coefficient[t], e.coefficient[t], 1e-12) << "term " << t;
+  }
+  const pd::ExtrapolatedParticles small = pd::refit_extrapolation(m, 1.5);
+  ASSERT_EQ(small.particle, e.particle);
+  EXPECT_LT(static_cast<double>(small.source.size()), 0.6 * static_cast<double>(e.source.size()));
+  const auto linear = [](const pd::Vec3& x) {
+    return pd::Vec3{1e-3 * (0.3 * x[0] - 0.2 * x[1] + 0.5 * x[2]), 1e-3 * (0.4 * x[1] + 0.1 * x[2]),
+                    1e-3 * (-0.6 * x[0] + 0.2 * x[2])};
+  };
+  for (std::size_t d = 0; d < small.size(); ++d) {
+    if (small.offsets[d] == small.offsets[d + 1]) {
+      continue; // out of reach: stays at zero in both
+    }
+    const pd::Vec3 expected = linear(m.particles.position[small.particle[d]]);
+    pd::Vec3 got{0, 0, 0};
+    for (std::size_t t = small.offsets[d]; t < small.offsets[d + 1]; ++t) {
+      const pd::Vec3 us = linear(m.particles.position[small.source[t]]);
+      for (std::size_t c = 0; c < 3; ++c) {
+        got[c] += small.coefficient[t] * us[c];
+      }
+    }
+    for (std::size_t c = 0; c < 3; ++c) {
+      EXPECT_NEAR(got[c], expected[c], 1e-12) << "dependant " << small.particle[d];
+    }
+  }
+}

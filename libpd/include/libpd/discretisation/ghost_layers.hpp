@@ -71,22 +71,37 @@ struct SymmetryPlane {
 std::vector<Vec3> ghost_sites(int dim, const LatticeSpec& lattice, HorizonRule rule,
                               const std::vector<Vec3>& body);
 
+/// The radius, in lattice spacings, of the cloud each dependant's quadratic is fitted to: the
+/// smallest that gives a particle in a corner of a box enough neighbours for the whole quadratic
+/// (3D: 20 for 10 terms, three positions along each axis; 2D: 8 for 6). √6.
+inline constexpr double ghost_fit_radius = 2.449489742783178;
+
 /// Extrapolation coefficients for every particle listed in `fitted` (ascending), from the
 /// particles with dependent[i] = 0 (the sources; every fitted particle is dependent too): each
 /// dependant is fitted around the nearest source among its bond family, from that source and its
-/// own free neighbours within √6 λ, with the quadratic basis restricted by the clamp planes the
-/// dependant lies behind (see above). A dependant with no source within the horizon, or behind
-/// three planes, gets no term (its displacement stays zero). Axes along which the sources do not
-/// vary enough for a linear (two positions) or quadratic (three) term drop those terms, so thin
+/// own free neighbours within ghost_fit_radius λ, with the quadratic basis restricted by the clamp
+/// planes the dependant lies behind (see above). A dependant with no source within the horizon, or
+/// behind three planes, gets no term (its displacement stays zero). Axes along which the sources do
+/// not vary enough for a linear (two positions) or quadratic (three) term drop those terms, so thin
 /// bodies extrapolate with what they can resolve. Beside a symmetry plane the fit also takes the
-/// sources' mirror images within √6 λ of the nearest source as data (each a term of its source
-/// with the normal component negated), so that a ghost beside the plane is fitted from both sides
-/// as in the full model.
+/// sources' mirror images within the fit radius of the nearest source as data (each a term of its
+/// source with the normal component negated), so that a ghost beside the plane is fitted from both
+/// sides as in the full model.
 ExtrapolatedParticles extrapolation_ties(int dim, double spacing, const std::vector<Vec3>& position,
                                          const BondFamily& family,
                                          const std::vector<std::uint8_t>& dependent,
                                          const std::vector<std::uint32_t>& fitted,
                                          const std::vector<ClampPlane>& planes,
                                          const std::vector<SymmetryPlane>& symmetry = {});
+
+/// The same dependants fitted again, each from only the part of its data (its terms' sources, seen
+/// through the symmetry planes their negated bits name) within `fit_radius` λ < ghost_fit_radius of
+/// its nearest datum, with the basis restricted as above: fewer sources per dependant and a less
+/// exact extrapolation (linear where the smaller cloud holds two positions along an axis). The
+/// static solver factors the operator of these as its preconditioner.
+ExtrapolatedParticles refit_within(int dim, double spacing, const std::vector<Vec3>& position,
+                                   const ExtrapolatedParticles& ties,
+                                   const std::vector<ClampPlane>& planes,
+                                   const std::vector<SymmetryPlane>& symmetry, double fit_radius);
 
 } // namespace pd

@@ -223,6 +223,11 @@ Model build_model(const ModelSpec& spec);
 /// The same on particles already generated from spec's dimension, lattice and bodies.
 Model build_model(const ModelSpec& spec, ParticleSet particles);
 
+/// The model's extrapolated particles (Model::extrapolated) fitted again, each from its sources
+/// within `fit_radius` λ of its nearest one (refit_within, ghost_layers.hpp): fewer sources per
+/// dependant, an operator the static solver factors as its preconditioner.
+ExtrapolatedParticles refit_extrapolation(const Model& m, double fit_radius);
+
 /// Bond stiffness of directed bond k, c_ij·V_j·corrections, whichever storage the model uses.
 inline double bond_stiffness(const Model& m, std::size_t k) {
   return m.field.per_bond() ? m.field.bond_stiffness[k] : m.field.stiffness;
