@@ -56,6 +56,7 @@ sys.path.insert(0, str(HERE))
 from pdreport import cases as case_files  # noqa: E402
 from pdreport import compare as cmp  # noqa: E402
 from pdreport import stages as S  # noqa: E402
+from pdreport import timing  # noqa: E402
 
 ROOT = HERE.parent
 
@@ -89,7 +90,12 @@ def build_stages(ctx: S.Ctx, records: dict[str, dict]) -> list[S.Stage]:
     listed = {c for c, _ in cases}
     structures = case_files.load()
     order = case_files.in_listed_order(structures, [c for c, _ in cases])
-    stages: list[S.Stage] = [S.fem_stage(ctx, p, cs) for p, cs in S.fe_problems(structures, order).items()]
+    # The deal.II checks of the references the report compares with: in the default mode not
+    # those whose only cases are "(slow)" (plate-thin's coarse check took 48 CPU-s for a case the
+    # default report does not run).
+    runs = {c for c, summary in cases if ctx.full or "(slow)" not in summary}
+    compared = [c for c in order if ctx.full or c in DEFAULT_SWEEP_CASES or {c, f"{c}-fast"} & runs]
+    stages: list[S.Stage] = [S.fem_stage(ctx, p, cs) for p, cs in S.fe_problems(structures, compared).items()]
     # `CASE-sweep` cases are the accuracy-vs-time sweeps: they go to the sweep stages.
     # Cases that `pd verify --list` itself calls "(slow)" run only with --full; the summary table
     # lists them as not run, with the reason.
@@ -120,7 +126,9 @@ def write_json(p: Path, obj: object) -> None:
 
 
 def run_stages(ctx: S.Ctx, stages: list[S.Stage], records: dict[str, dict], force: list[str],
-               jobs: int) -> None:
+               jobs: int) -> list[S.Stage]:
+    """Runs (or takes from the cache) every stage; returns the stages it ran, in the order it
+    started them."""
     cache = ctx.out / "cache"
     data = ctx.out / "data"
     cache.mkdir(parents=True, exist_ok=True)
@@ -141,11 +149,15 @@ def run_stages(ctx: S.Ctx, stages: list[S.Stage], records: dict[str, dict], forc
           f"(m:ss; from the previous run's durations where recorded) -> {ctx.out}", flush=True)
     start = time.time()
     done_est = 0.0
+    submitted: list[S.Stage] = []
 
     def execute(st: S.Stage) -> dict:
         t0 = time.time()
+        S.cpu_account_reset()
         rec = {"name": st.name, "group": st.group, "title": st.title, "key": keys[st.name],
-               "commands": st.commands, "cached": False}
+               "commands": st.commands, "cached": False,
+               "threads": int(st.env.get("OMP_NUM_THREADS", os.cpu_count() or 1)),
+               "loadavg_at_start": os.getloadavg()[0]}
         try:
             rec["result"] = st.fn(ctx, st)
             rec["status"] = "ok"
@@ -156,6 +168,7 @@ def run_stages(ctx: S.Ctx, stages: list[S.Stage], records: dict[str, dict], forc
             rec["status"], rec["result"] = "failed", None
             rec["error"] = f"{type(e).__name__}: {e}\n{traceback.format_exc(limit=4)}"
         rec["seconds"] = time.time() - t0
+        rec["cpu_seconds"] = S.cpu_account()
         return rec
 
     def finish(i: int, st: S.Stage, rec: dict) -> None:
@@ -167,7 +180,8 @@ def run_stages(ctx: S.Ctx, stages: list[S.Stage], records: dict[str, dict], forc
             if rec["status"] == "ok":
                 write_json(cache / f"{st.file_name}.json", rec)
             mark = "ok" if rec["status"] == "ok" else "FAILED"
-            print(f"[{i:>2}/{len(stages)}] {st.name:<28} {mark} in {rec['seconds']:.1f} s" +
+            print(f"[{i:>2}/{len(stages)}] {st.name:<28} {mark} in {rec['seconds']:.1f} s "
+                  f"({rec['cpu_seconds']:.1f} s CPU)" +
                   ("" if rec["status"] == "ok" else ": " + " | ".join(l for l in rec["error"].splitlines()[:3] if l.strip())[:300]) +
                   f"  (elapsed {fmt_s(time.time() - start)}, ETA {fmt_s(max(total_est - done_est, 0))})",
                   flush=True)
@@ -191,12 +205,16 @@ def run_stages(ctx: S.Ctx, stages: list[S.Stage], records: dict[str, dict], forc
                       flush=True)
                 finish(i + k + 1, st, rec)
         todo = [(i + k + 1, st) for k, st in enumerate(batch) if st.name not in cached]
+        submitted.extend(st for _, st in sorted(todo, key=lambda t: -estimate[t[1].name]))
         if len(todo) == 1 or (todo and jobs <= 1):
             for n, st in todo:
                 print(f"[{n:>2}/{len(stages)}] {st.name:<28} running, est. {fmt_s(estimate[st.name])}, "
                       f"ETA {fmt_s(max(total_est - done_est, 0))}", flush=True)
                 finish(n, st, execute(st))
         elif todo:
+            # Longest first (from the previous run's durations, else the stages' guesses): a long
+            # stage started last would leave the other core idle at the end of the batch.
+            todo.sort(key=lambda t: -estimate[t[1].name])
             threads = max(1, (os.cpu_count() or 1) // jobs)
             for _, st in todo:
                 st.env.setdefault("OMP_NUM_THREADS", str(threads))
@@ -217,6 +235,7 @@ def run_stages(ctx: S.Ctx, stages: list[S.Stage], records: dict[str, dict], forc
             ordered[n] = records[n]
     records.clear()
     records.update(ordered)
+    return submitted
 
 
 def load_records(data: Path) -> tuple[dict[str, dict], dict, dict]:
@@ -291,10 +310,10 @@ def main(argv: list[str] | None = None) -> int:
         # Run only the selected stages; keep the stored records of the others for the page.
         previous, _, _ = load_records(ctx.out / "data")
         stages = [s for s in stages if any(fnmatch.fnmatch(s.name, g) for g in a.only)]
-        run_stages(ctx, stages, records, a.force, a.jobs)
+        ran = run_stages(ctx, stages, records, a.force, a.jobs)
         records = previous | records
     else:
-        run_stages(ctx, stages, records, a.force, a.jobs)
+        ran = run_stages(ctx, stages, records, a.force, a.jobs)
         # Records of stages that no longer exist must not leak into a later --render-only.
         names = {S.safe_name(n) for n in records}
         for f in (ctx.out / "data").glob("*.json"):
@@ -305,6 +324,11 @@ def main(argv: list[str] | None = None) -> int:
             "command": "python3 reports/pd_report.py " + shlex.join(sys.argv[1:] if argv is None else argv),
             "total_seconds": total,
             "stage_seconds": {n: r.get("seconds") for n, r in records.items()},
+            "stage_cpu_seconds": {n: r.get("cpu_seconds") for n, r in records.items()},
+            "loadavg_at_end": list(os.getloadavg()),
+            "quiet_estimate": timing.quiet_estimate(
+                [(st.name, st.parallel, records[st.name].get("cpu_seconds") or 0.0) for st in ran],
+                a.jobs, os.cpu_count() or 1),
             "stage_cached": {n: bool(r.get("cached")) for n, r in records.items()},
             "cases": CASES}
     data = ctx.out / "data"
@@ -317,7 +341,11 @@ def main(argv: list[str] | None = None) -> int:
     failed = [n for n, r in records.items() if r.get("status") != "ok"]
     gates = [n for n, r in records.items() if r.get("group") == "verify" and r.get("status") == "ok"
              and not (r.get("result") or {}).get("passed")]
-    print(f"== report: {ctx.out / 'index.html'} and report.json ({fmt_s(total)} this run)")
+    q = meta["quiet_estimate"]
+    print(f"== report: {ctx.out / 'index.html'} and report.json ({fmt_s(total)} this run, "
+          f"{q['cpu_seconds']:.0f} CPU s; on a quiet {q['cores']}-core machine an estimated "
+          f"{fmt_s(q['low_seconds'])}–{fmt_s(q['high_seconds'])}; load average at the end "
+          f"{meta['loadavg_at_end'][0]:.1f})")
     if failed:
         print(f"== {len(failed)} stage(s) FAILED: {', '.join(failed)}")
     if gates:

@@ -50,9 +50,13 @@ def header(page: Page) -> str:
             ["python / matplotlib", f"{esc(e.get('python'))} / {esc(e.get('matplotlib'))}"]]
     n_failed = sum(1 for r in page.rec.values() if r.get("status") != "ok")
     total = page.meta.get("total_seconds")
+    q = page.meta.get("quiet_estimate") or {}
+    quiet = (f"; {q['cpu_seconds']:.0f} CPU s, on a quiet {q['cores']}-core machine an estimated "
+             f"{q['low_seconds']:.0f}–{q['high_seconds']:.0f} s (from the stages' CPU seconds, "
+             f"see Stages and timings)" if q.get("cpu_seconds") else "")
     status = (f'<p class="{"fail" if n_failed else "pass"}">{len(page.rec)} stages, '
               f'{n_failed} failed' + (f", {total:.0f} s wall for this run" if total else "") +
-              ".</p>")
+              quiet + ".</p>")
     return ('<section id="environment"><h2>Environment</h2>' + status +
             table(["", ""], rows, 'id="environment-table"') + "</section>")
 
@@ -68,7 +72,9 @@ def stage_table(page: Page) -> str:
         st = r.get("status")
         cls = "pass" if st == "ok" else "fail"
         rows.append([f"<code>{esc(name)}</code>", f'<span class="{cls}">{esc(st)}</span>',
-                     num_td(f"{r.get('seconds', 0):.1f}"), "cached" if r.get("cached") else "ran",
+                     num_td(f"{r.get('seconds', 0):.1f}"),
+                     num_td("" if r.get("cpu_seconds") is None else f"{r['cpu_seconds']:.1f}"),
+                     num_td(esc(r.get("threads", ""))), "cached" if r.get("cached") else "ran",
                      "<br>".join(f"<code>{esc(' '.join(c))}</code>" for c in r.get("commands", [])),
                      esc((r.get("error") or "")[:300])])
     dom = ""
@@ -77,9 +83,11 @@ def stage_table(page: Page) -> str:
         dom = ("<p class=\"reading\">Time (as recorded when each stage last ran): " +
                ", ".join(f"{g} {s:.0f} s ({100 * s / total_all:.0f} %)" for g, s in top[:5]) +
                f". <b>{esc(top[0][0])}</b> dominates. This run computed {total_fresh:.0f} s; "
-               f"the rest came from the cache.</p>")
+               f"the rest came from the cache. CPU s is user + system time of the stage's "
+               f"commands (their CPU cost whatever else loaded the machine); threads is the "
+               f"OMP_NUM_THREADS it ran with.</p>")
     return ('<section id="stages"><h2>Stages and timings</h2>' + dom +
-            table(["stage", "status", "seconds", "this run", "command", "error"], rows,
+            table(["stage", "status", "wall s", "CPU s", "threads", "this run", "command", "error"], rows,
                   'id="stage-table"') + "</section>")
 
 
@@ -98,7 +106,8 @@ def render(out: Path, records: dict[str, dict], env: dict, meta: dict) -> dict:
         "schema": "libpd-report/1",
         "environment": env,
         "meta": meta,
-        "stages": {k: {kk: v.get(kk) for kk in ("group", "status", "seconds", "cached", "error", "commands")}
+        "stages": {k: {kk: v.get(kk) for kk in ("group", "status", "seconds", "cpu_seconds", "threads",
+                                                     "loadavg_at_start", "cached", "error", "commands")}
                    for k, v in records.items()},
         "figures": page.figures,
         "metrics": measured,
