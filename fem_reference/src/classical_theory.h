@@ -5,6 +5,7 @@
 #include "parameters.h"
 #include "report.h"
 
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -12,9 +13,10 @@
 namespace pdfem {
 struct QuantitySummary {
   std::string name;
-  Point<3> point;        // coordinates beyond the dimension are 0
-  double finest = 0.;    // value on the finest level
-  Richardson richardson; // extrapolation from the last three levels
+  Point<3> point;                            // coordinates beyond the dimension are 0
+  double finest = 0.;                        // value on the finest level
+  Richardson richardson;                     // extrapolation from the last three levels
+  std::vector<std::optional<double>> orders; // observed order of every three consecutive levels
 };
 
 struct Theory {

@@ -254,6 +254,67 @@ namespace pdfem
     return r;
   }
 
+  Richardson richardson(const std::vector<double> &q,
+                        const std::vector<double> &h)
+  {
+    if (q.size() != h.size())
+      throw std::invalid_argument("richardson: one mesh size per value");
+    if (q.size() < 3)
+      return richardson(q, 2.);
+    const std::size_t n  = q.size();
+    const double      r1 = h[n - 3] / h[n - 2], r2 = h[n - 2] / h[n - 1];
+    if (std::abs(r1 - r2) <= 1e-12 * r2)
+      return richardson(q, r2);
+
+    Richardson   r;
+    const double q0 = q[n - 3], q1 = q[n - 2], q2 = q[n - 1];
+    const double d1 = q1 - q0, d2 = q2 - q1;
+    r.extrapolated   = q2;
+    r.error_estimate = std::abs(d2);
+    // g(p) = (h0^p - h1^p) / (h1^p - h2^p) rises from ln(r1)/ln(r2) at
+    // p -> 0; a solution p > 0 exists iff d1/d2 exceeds that limit.
+    const auto g = [&](const double p) {
+      return (std::pow(h[n - 3], p) - std::pow(h[n - 2], p)) /
+             (std::pow(h[n - 2], p) - std::pow(h[n - 1], p));
+    };
+    const double target = (d2 != 0.) ? d1 / d2 : 0.;
+    if (d2 == 0.)
+      {
+        r.error_estimate = 0.;
+        r.valid          = true;
+      }
+    else if (target > std::log(r1) / std::log(r2) && target < g(20.))
+      {
+        double lo = 1e-9, hi = 20.;
+        for (int it = 0; it < 200 && hi - lo > 1e-13; ++it)
+          {
+            const double mid = 0.5 * (lo + hi);
+            (g(mid) < target ? lo : hi) = mid;
+          }
+        const double p = 0.5 * (lo + hi);
+        r.order        = p;
+        r.extrapolated = q2 - (q1 - q2) * std::pow(h[n - 1], p) /
+                                (std::pow(h[n - 2], p) - std::pow(h[n - 1], p));
+        r.error_estimate = std::abs(r.extrapolated - q2);
+        r.valid          = true;
+      }
+    r.relative_error = (r.extrapolated != 0.) ?
+                         r.error_estimate / std::abs(r.extrapolated) :
+                         r.error_estimate;
+    return r;
+  }
+
+  std::vector<std::optional<double>>
+  observed_orders(const std::vector<double> &q, const std::vector<double> &h)
+  {
+    std::vector<std::optional<double>> orders;
+    for (std::size_t k = 3; k <= q.size(); ++k)
+      orders.push_back(richardson(std::vector<double>(q.begin(), q.begin() + k),
+                                  std::vector<double>(h.begin(), h.begin() + k))
+                         .order);
+    return orders;
+  }
+
   std::string iso_date_time()
   {
     const std::time_t t = std::time(nullptr);
