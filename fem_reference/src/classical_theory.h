@@ -5,7 +5,6 @@
 #include "parameters.h"
 #include "report.h"
 
-#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -13,10 +12,10 @@
 namespace pdfem {
 struct QuantitySummary {
   std::string name;
-  Point<3> point;                            // coordinates beyond the dimension are 0
-  double finest = 0.;                        // value on the finest level
-  Richardson richardson;                     // extrapolation from the last three levels
-  std::vector<std::optional<double>> orders; // observed order of every three consecutive levels
+  Point<3> point;                  // coordinates beyond the dimension are 0
+  double finest = 0.;              // value on the finest level
+  Richardson richardson;           // extrapolation from the last three levels
+  std::vector<Richardson> triples; // the same from every three consecutive levels
 };
 
 struct Theory {

@@ -318,7 +318,7 @@ void ElasticReference<dim>::output_results(const std::string& command_line,
     s.point = q.point;
     s.finest = values.back();
     s.richardson = richardson(values, mesh_sizes);
-    s.orders = observed_orders(values, mesh_sizes);
+    s.triples = richardson_per_triple(values, mesh_sizes);
     summary.quantities.push_back(s);
   }
 
@@ -397,9 +397,11 @@ void ElasticReference<dim>::write_summary(const std::string& command_line,
       w.value("value", q.finest);
       w.value("extrapolated", q.richardson.extrapolated);
       w.value("observed_order", q.richardson.order);
+      // The order of every triple of consecutive levels, coarsest first: where the orders
+      // settle, the extrapolation is in its asymptotic range.
       w.begin_array("observed_orders_per_triple");
-      for (const auto& p : q.orders)
-        w.value("", p);
+      for (const auto& t : q.triples)
+        w.value("", t.order);
       w.end_array();
       w.value("richardson_valid", q.richardson.valid);
       w.value("error_estimate", q.richardson.error_estimate);

@@ -81,12 +81,18 @@ namespace pdfem
   Richardson richardson(const std::vector<double> &values,
                         const std::vector<double> &mesh_sizes);
 
-  // The observed order of every three consecutive levels (empty where the
-  // triple is not in the asymptotic range): a reference is demonstrated
-  // converged where these orders settle, not by one triple alone.
-  std::vector<std::optional<double>>
-  observed_orders(const std::vector<double> &values,
-                  const std::vector<double> &mesh_sizes);
+  // The extrapolation of every three consecutive levels: a reference is
+  // demonstrated converged where their orders settle and their extrapolated
+  // values agree, not by the last triple alone.
+  std::vector<Richardson>
+  richardson_per_triple(const std::vector<double> &values,
+                        const std::vector<double> &mesh_sizes);
+
+  // pd-fem --richardson-selftest: both forms above on sequences
+  // q = q_inf + C h^p with known q_inf and p (equal and unequal ratios) and
+  // on one whose differences change sign; prints a line per check and
+  // returns whether all pass.
+  bool richardson_selftest();
 
   // Current date/time as ISO 8601 (local time with offset).
   std::string iso_date_time();
