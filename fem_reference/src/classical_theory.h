@@ -12,9 +12,10 @@
 namespace pdfem {
 struct QuantitySummary {
   std::string name;
-  Point<3> point;        // coordinates beyond the dimension are 0
-  double finest = 0.;    // value on the finest level
-  Richardson richardson; // extrapolation from the last three levels
+  Point<3> point;                  // coordinates beyond the dimension are 0
+  double finest = 0.;              // value on the finest level
+  Richardson richardson;           // extrapolation from the last three levels
+  std::vector<Richardson> triples; // the same from every three consecutive levels
 };
 
 struct Theory {

@@ -16,6 +16,7 @@
 #include <deal.II/lac/vector.h>
 #include <filesystem>
 #include <map>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -25,6 +26,7 @@ using namespace dealii;
 struct LevelResult {
   unsigned int level = 0;
   std::vector<unsigned int> subdivisions; // one per axis
+  unsigned int multiplier = 1;            // subdivisions = base subdivisions x multiplier
   unsigned int cells = 0;
   types::global_dof_index dofs = 0;
   std::map<std::string, double> deflection; // positive downward (-u_z; 2D: -u_y), m
@@ -57,7 +59,8 @@ public:
                  const std::string& parameters_prm);
 
 private:
-  void make_grid();
+  void make_grid(unsigned int level);
+  void grade(Triangulation<dim>& mesh, const std::vector<double>& extent) const;
   void setup_system();
   void assemble_system();
   void solve();
@@ -70,7 +73,9 @@ private:
   const unsigned int n_levels;
   const std::filesystem::path output_directory;
 
-  Triangulation<dim> triangulation;
+  // A level's mesh is built afresh (make_grid), then the DoFHandler moves over to it before the
+  // previous one is released: a Triangulation may not be cleared while a DoFHandler uses it.
+  std::unique_ptr<Triangulation<dim>> triangulation;
   const FESystem<dim> fe;
   DoFHandler<dim> dof_handler;
   AffineConstraints<double> constraints;

@@ -202,6 +202,26 @@ void declare_numerics_and_output(ParameterHandler& prm) {
                     "Richardson error estimate.");
   prm.declare_entry("Coarse levels", "3", Patterns::Integer(1, 8),
                     "Number of meshes used with --coarse (quick tests).");
+  prm.declare_entry("Level multipliers", "", Patterns::List(Patterns::Integer(1, 1000), 0, 20, ","),
+                    "Comma separated, increasing: level k has (base subdivisions) x m_k cells "
+                    "per direction, so its mesh size is h0/m_k, and Richardson extrapolation "
+                    "uses these sizes (the ratios need not be equal). Needs at least as many "
+                    "entries as levels are run. Empty: m_k = 2^k, each level halves every "
+                    "cell edge.");
+  prm.declare_entry("Graded faces", "", Patterns::List(Patterns::Selection(face_names), 0, 6, ","),
+                    "Faces (as in Boundary conditions) toward which the mesh is graded: "
+                    "within Graded layer of such a face, at distance d, the map of a uniform "
+                    "mesh is d ~ s^beta (beta = Grading exponent), so cells shrink toward "
+                    "the face and the edge singularities there (clamped face meeting a free "
+                    "one: u ~ r^0.7) are resolved at the rate of a smooth solution for "
+                    "beta >= p/0.7. Cells stay boxes (one map per axis). Empty: uniform.");
+  prm.declare_entry("Grading exponent", "1", Patterns::Double(1., 6.),
+                    "beta of Graded faces; 1 is a uniform mesh.");
+  prm.declare_entry("Graded layer", "0.25", Patterns::Double(0.01, 0.5),
+                    "Width of the graded layer at each graded face, as a fraction of the "
+                    "extent of that axis; between the layers the mesh is uniform, its cells "
+                    "1/(1 - (number of graded ends) x layer x (1 - 1/beta)) times those of an "
+                    "ungraded mesh.");
   prm.leave_subsection();
 
   prm.enter_subsection("Solver");
@@ -263,6 +283,16 @@ void parse_output(ParameterHandler& p, Parameters& prm) {
   p.leave_subsection();
 }
 } // namespace
+
+unsigned int Parameters::level_multiplier(const unsigned int level) const {
+  if (level_multipliers.empty())
+    return 1U << level;
+  if (level >= level_multipliers.size())
+    throw std::runtime_error("Discretisation/Level multipliers has " +
+                             std::to_string(level_multipliers.size()) + " entries, but level " +
+                             std::to_string(level) + " was asked for");
+  return level_multipliers[level];
+}
 
 std::vector<double> Parameters::extent() const {
   if (dimension == 2)
@@ -353,6 +383,21 @@ void Parameters::parse(ParameterHandler& p) {
   base_element_size = p.get_double("Base element size");
   n_levels = static_cast<unsigned int>(p.get_integer("Number of levels"));
   n_coarse_levels = static_cast<unsigned int>(p.get_integer("Coarse levels"));
+  level_multipliers.clear();
+  for (const auto& m : Utilities::split_string_list(p.get("Level multipliers")))
+    level_multipliers.push_back(static_cast<unsigned int>(Utilities::string_to_int(m)));
+  for (std::size_t k = 1; k < level_multipliers.size(); ++k)
+    if (level_multipliers[k] <= level_multipliers[k - 1])
+      throw std::runtime_error("Discretisation/Level multipliers must increase");
+  graded_faces.clear();
+  for (const auto& f : Utilities::split_string_list(p.get("Graded faces"))) {
+    graded_faces.push_back(face_id(f));
+    if (graded_faces.back() >= 2 * dimension)
+      throw std::runtime_error("Discretisation/Graded faces: face " + f +
+                               " does not exist with Dimension = " + std::to_string(dimension));
+  }
+  grading_exponent = p.get_double("Grading exponent");
+  graded_layer = p.get_double("Graded layer");
   p.leave_subsection();
 
   p.enter_subsection("Solver");

@@ -34,6 +34,15 @@ struct Parameters {
   unsigned int degree = 2;
   double base_element_size = 0.;
   unsigned int n_levels = 3, n_coarse_levels = 3;
+  // Level k has base subdivisions x level_multipliers[k] cells per direction; empty: 2^k (each
+  // level halves every cell edge).
+  std::vector<unsigned int> level_multipliers;
+  // Mesh grading toward these faces (ids as clamped_faces): within `graded_layer` (a fraction of
+  // the extent) of such a face the cell edges grow like distance^(1 - 1/grading_exponent).
+  std::vector<unsigned int> graded_faces;
+  double grading_exponent = 1., graded_layer = 0.25;
+  // The multiplier of level k: level_multipliers[k], or 2^k.
+  unsigned int level_multiplier(unsigned int level) const;
   // Solver
   std::string preconditioner; // "AMG" | "SSOR"
   double relative_tolerance = 1e-10;

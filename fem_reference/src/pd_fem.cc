@@ -88,7 +88,7 @@ namespace {
 const char* const usage_text =
     "usage: pd-fem PRMFILE [-o DIR] [--levels N] [--coarse] [--check REFERENCE.json]\n"
     "       pd-fem --scene SCENE.yaml [-o DIR] [--levels N] [--coarse]\n"
-    "       pd-fem --print-parameters | --kirchhoff-selftest | --help\n"
+    "       pd-fem --print-parameters | --kirchhoff-selftest | --richardson-selftest | --help\n"
     "\n"
     "Solves linear elasticity (3D, or 2D plane stress / plane strain) with deal.II\n"
     "on a sequence of refined meshes\n"
@@ -110,6 +110,8 @@ const char* const usage_text =
     "                     (relative 1e-6); exit code 2 on failure\n"
     "  --print-parameters print every parameter with its documentation\n"
     "  --kirchhoff-selftest  verify the Kirchhoff plate series solver\n"
+    "  --richardson-selftest verify the Richardson extrapolation (equal and\n"
+    "                     unequal ratios between the levels' mesh sizes)\n"
     "  --help             this text\n";
 
 struct Arguments {
@@ -236,6 +238,8 @@ int main(int argc, char** argv) {
         return 0;
       } else if (a == "--kirchhoff-selftest")
         return pdfem::kirchhoff_selftest() ? 0 : 2;
+      else if (a == "--richardson-selftest")
+        return pdfem::richardson_selftest() ? 0 : 2;
       else if (a == "-o")
         args.output_dir = need_value(i);
       else if (a == "--levels") {

@@ -70,6 +70,30 @@ namespace pdfem
 
   Richardson richardson(const std::vector<double> &values, double ratio = 2.0);
 
+  // The same from the last three values of a sequence whose mesh sizes h
+  // (any unit, decreasing) need not shrink by one constant ratio: the
+  // order p solves (q1 - q0) / (q2 - q1) = (h0^p - h1^p) / (h1^p - h2^p),
+  // whose right side grows monotonically with p (bisection), and
+  //   q_ext = q2 - (q1 - q2) h2^p / (h1^p - h2^p).
+  // With a constant ratio this is richardson(values, ratio) above.  If the
+  // differences change sign, or shrink too slowly for any p > 0, the
+  // estimate falls back to |q2 - q1| as there.
+  Richardson richardson(const std::vector<double> &values,
+                        const std::vector<double> &mesh_sizes);
+
+  // The extrapolation of every three consecutive levels: a reference is
+  // demonstrated converged where their orders settle and their extrapolated
+  // values agree, not by the last triple alone.
+  std::vector<Richardson>
+  richardson_per_triple(const std::vector<double> &values,
+                        const std::vector<double> &mesh_sizes);
+
+  // pd-fem --richardson-selftest: both forms above on sequences
+  // q = q_inf + C h^p with known q_inf and p (equal and unequal ratios) and
+  // on one whose differences change sign; prints a line per check and
+  // returns whether all pass.
+  bool richardson_selftest();
+
   // Current date/time as ISO 8601 (local time with offset).
   std::string iso_date_time();
 } // namespace pdfem
