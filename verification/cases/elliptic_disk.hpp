@@ -38,9 +38,11 @@ struct EllipticDiskSpec {
   int pattern = EllipticDiskTable1{}.pattern;
   double xi_max = std::numbers::pi / 2; ///< ξ of the outer boundary (§10.2's ξ range)
   double remote_stress = 1e8;           ///< S of eq. 116 [Pa]: elastic everywhere at Table 1's σ_y
-  /// Depth of the held boundary zone in rings of zones along ξ (Fig. 6: the outer ring). It must
-  /// hold every arm of a free particle that would reach outside the disk (checked).
-  double boundary_rings = 1;
+  /// Depth of the held boundary zone in rings of zones along ξ (Fig. 6's grey zones). It must
+  /// hold every arm of a free particle that would reach outside the disk (checked): one ring does
+  /// at 5 particles per zone side, not at 3 (the horizon α h is then deeper than the ring), so
+  /// two, and the same at every density, so that a convergence study measures one interior.
+  double boundary_rings = 2;
   bool plasticity = false;       ///< eq. 111 with Table 1's ε_y
   bool elongation_limit = false; ///< eq. 118 with Table 1's δ = c/1000 (needs plasticity)
   DiskParticles particles = DiskParticles::graded;
