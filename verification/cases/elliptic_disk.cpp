@@ -22,13 +22,15 @@ std::pair<double, double> semi_axes(const EllipticDiskSpec& s) {
 
 /// The body as the scene reader generates it: the paper's graded ellipse, or for `uniform` a
 /// graded box of one zone width (grading 1) over the ellipse's bounding box, cut to the ellipse
-/// below. Both get the generator's Monte Carlo noise (Fig. 8) with its defaults.
+/// below. Both get the generator's Monte Carlo noise (Fig. 8): its step and spacing defaults, the
+/// spec's sweeps.
 std::string body_text(const EllipticDiskSpec& s) {
   if (s.particles == DiskParticles::graded) {
     return fmt::format(
         "    graded: {{shape: ellipse, focal_half_distance: {:.17g}, xi_max: {:.17g}, "
-        "zones: [{}, {}], pattern: {}, seed: {}}}\n",
-        s.table.focal_half_distance, s.xi_max, s.zones_xi(), s.zones_eta(), s.pattern, s.seed);
+        "zones: [{}, {}], pattern: {}, seed: {}, sweeps: {}}}\n",
+        s.table.focal_half_distance, s.xi_max, s.zones_xi(), s.zones_eta(), s.pattern, s.seed,
+        s.sweeps);
   }
   if (!(s.uniform_spacing > 0)) {
     throw std::invalid_argument("elliptic disk: a uniform particle set needs uniform_spacing > 0");
@@ -36,8 +38,8 @@ std::string body_text(const EllipticDiskSpec& s) {
   const auto [a, b] = semi_axes(s);
   const long columns = std::max(1L, std::lround(2 * a / s.uniform_spacing));
   return fmt::format("    graded: {{shape: box, box: [[{:.17g}, {:.17g}], [{:.17g}, {:.17g}]], "
-                     "zones: [{}, 1], pattern: 1, seed: {}}}\n",
-                     -a, -b, a, b, columns, s.seed);
+                     "zones: [{}, 1], pattern: 1, seed: {}, sweeps: {}}}\n",
+                     -a, -b, a, b, columns, s.seed, s.sweeps);
 }
 
 std::string scene_text(const EllipticDiskSpec& s) {

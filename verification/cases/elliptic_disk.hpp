@@ -21,6 +21,7 @@
 #pragma once
 
 #include "elliptic_crack.hpp"
+#include "libpd/discretisation/graded_set.hpp"
 #include "libpd/io/scene.hpp"
 
 #include <cstdint>
@@ -46,8 +47,9 @@ struct EllipticDiskSpec {
   bool plasticity = false;       ///< eq. 111 with Table 1's ε_y
   bool elongation_limit = false; ///< eq. 118 with Table 1's δ = c/1000 (needs plasticity)
   DiskParticles particles = DiskParticles::graded;
-  double uniform_spacing = 0; ///< uniform: particle spacing [m]
-  std::uint64_t seed = 1;     ///< Monte Carlo noise of the particle positions (Fig. 8)
+  double uniform_spacing = 0;          ///< uniform: particle spacing [m]
+  std::uint64_t seed = 1;              ///< Monte Carlo noise of the particle positions (Fig. 8)
+  int sweeps = GradedSetSpec{}.sweeps; ///< Monte Carlo sweeps (0: the regular zone pattern)
 
   int zones_xi() const { return table.zones_xi / 2; }   ///< zones along ξ ∈ (0, ξ_max]
   int zones_eta() const { return 2 * table.zones_eta; } ///< zones around, η ∈ [0, 2π)
