@@ -8,8 +8,7 @@
 // "Interior" is every particle not held: the held zone is exact by construction, so counting it
 // would only dilute the error by an amount that depends on the zone's width. The held zone is at
 // least a horizon deep (checked when the disk is built), so every interior particle has a full
-// neighbourhood; the crack faces and tips are interior and carry most of the error (eq. 116 has
-// the √r singularity there, and the particles are finest there).
+// neighbourhood. The crack faces and tips are interior (eq. 116's √r singularity).
 //
 // The error measures, each over the interior:
 //   rms        = √(Σ|u − u₁₁₆|² / n) / √(Σ|u₁₁₆|² / n)   (per particle, as Fig. 10's RMS)
@@ -27,6 +26,20 @@
 // `elliptic-disk` (label verification): a coarser zone grid, 10 × 20 zones, 3…6 particles per
 // zone side (1,800 … 7,200 particles). `elliptic-disk-convergence` (verification-full): the
 // paper's grid, 20 × 40 zones, 3…7 particles per side (7,200 … 39,200), Fig. 10's densities.
+// ADR's steady state (force 1e-7, kinetic 1e-12) is far below the error: 1e-10 / 1e-20 leave
+// every RMS of elliptic-disk unchanged in 4 digits.
+//
+// Measured (2026-11-27), RMS error (L2):
+//   elliptic-disk             1,800 … 7,200:  3.28, 2.47, 2.45, 1.87 % (3.11, 2.41, 2.20, 1.77 %);
+//                             order 0.74 in spacing, passes. Beyond c/4 of the tips: 3.04, 2.34,
+//                             2.26, 1.74 %: the error is spread over the disk, not at the tips.
+//   elliptic-disk-convergence 7,200 … 39,200: 2.09, 1.97, 1.70, 1.38, 1.42 % (1.99, 1.73, 1.46,
+//                             1.22, 1.22 %): the finest set is not better, so the gate FAILS.
+// The error levels off at about 1.2–1.4 %. The Monte Carlo noise (Fig. 8) is the suspect: on a
+// noisy set the fourth moments of most particles' arms cannot be matched (fibre_arms.hpp: 35 of
+// 7,200 and 134 of 20,000 particles balanced), so each particle's response to a homogeneous
+// strain is the kernel weights' (up to 21 % off, anisotropic) and does not improve with
+// refinement. The `regular` series (the same zones without noise) measures that.
 #include "cases.hpp"
 #include "elliptic_disk.hpp"
 #include "libpd/app/run.hpp"
@@ -166,12 +179,9 @@ Json series_json(Series& s) {
   return j;
 }
 
-/// The gated series at `patterns`; then the densities `regular` without the Monte Carlo noise
-/// (reported, not gated: how much of the error the irregular arrangement makes). Without noise
-/// the arms' balance applies at most particles (fibre_arms.hpp) and costs most of the set-up:
-/// 75 s at 7,200 particles under load, growing faster than the count.
+/// The gated series at `patterns`.
 Json run_densities(const Context& ctx, const std::string& name, const EllipticDiskSpec& base,
-                   const std::vector<int>& patterns, const std::vector<int>& regular) {
+                   const std::vector<int>& patterns) {
   const auto start = std::chrono::steady_clock::now();
   Json out;
   out["case"] = name;
@@ -180,6 +190,7 @@ Json run_densities(const Context& ctx, const std::string& name, const EllipticDi
   out["zones"] = Json::array_of(std::vector<int>{base.zones_xi(), base.zones_eta()});
   out["xi_max"] = base.xi_max;
   out["remote_stress"] = base.remote_stress;
+  out["monte_carlo_sweeps"] = base.sweeps;
   Series gated = run_series(ctx, name, base, patterns);
   const bool positive = gated.order.order && *gated.order.order > 0;
   const bool passed = gated.converged && gated.falling && positive;
@@ -187,19 +198,19 @@ Json run_densities(const Context& ctx, const std::string& name, const EllipticDi
   out["runs"] = *series.find("runs");
   out["observed_order"] = *series.find("observed_order");
   out["rate_in_particle_count"] = *series.find("rate_in_particle_count");
-  if (!regular.empty()) {
-    std::fflush(stdout);
-    fmt::print("   without the Monte Carlo noise (reported, not gated):\n");
-    EllipticDiskSpec spec = base;
-    spec.sweeps = 0;
-    Series r = run_series(ctx, name + "/regular", spec, regular);
-    out["regular"] = series_json(r);
-  }
   finish_case(out,
               "every run at its steady state, the RMS error falling at every refinement and the "
               "observed order positive",
               passed, start);
   return out;
+}
+
+/// The coarse zone grid of the CI case.
+EllipticDiskSpec coarse_grid() {
+  EllipticDiskSpec spec;
+  spec.table.zones_xi /= 2; // 10 × 20 zones instead of 20 × 40
+  spec.table.zones_eta /= 2;
+  return spec;
 }
 
 /// The uniform sets' particle count and time at a graded set's error: log n and log t are
@@ -257,13 +268,11 @@ Json rows_of(const std::vector<DiskError>& runs) {
   return a;
 }
 
-/// Graded sets at `patterns` per zone side and uniform ones at spacings c/`per_c`, all with
-/// `sweeps` Monte Carlo sweeps, and the uniform set matching each graded one's error.
-Json compare_sets(const Context& ctx, const std::string& folder, int sweeps,
+/// Graded sets of `base` at `patterns` per zone side and uniform ones at spacings c/`per_c` (the
+/// same held zone), and the uniform set matching each graded one's error.
+Json compare_sets(const Context& ctx, const std::string& folder, const EllipticDiskSpec& base,
                   const std::vector<int>& patterns, const std::vector<double>& per_c,
                   bool& converged) {
-  EllipticDiskSpec base;
-  base.sweeps = sweeps;
   std::vector<DiskError> graded, uniform;
   for (const int p : patterns) {
     EllipticDiskSpec spec = base;
@@ -280,7 +289,8 @@ Json compare_sets(const Context& ctx, const std::string& folder, int sweeps,
     converged = converged && uniform.back().converged;
   }
   Json out;
-  out["sweeps"] = sweeps;
+  out["monte_carlo_sweeps"] = base.sweeps;
+  out["zones"] = Json::array_of(std::vector<int>{base.zones_xi(), base.zones_eta()});
   out["graded"] = rows_of(graded);
   out["uniform"] = rows_of(uniform);
   Json matches = Json::array();
@@ -300,31 +310,38 @@ Json run_elliptic_disk_saving(const Context& ctx) {
   out["quantity"] = "particles and time a uniform particle set needs for the L2 displacement "
                     "error of the graded one (the disk of elliptic-disk-convergence)";
   bool converged = true;
-  // The paper's arrangement (Monte Carlo noise, Fig. 8). Uniform spacings c/12 … c/32: about
-  // 2,600 … 18,600 particles (at c/8 a horizon reaches past the held zone, two rings deep).
+  // The paper's arrangement (Monte Carlo noise, Fig. 8) and grid. Uniform spacings c/12 … c/32:
+  // about 2,600 … 18,600 particles (at c/8 a horizon reaches past the held zone, two rings deep).
   fmt::print("   with the Monte Carlo noise of Fig. 8:\n");
-  out["noisy"] = compare_sets(ctx, "elliptic-disk-saving", GradedSetSpec{}.sweeps, {3, 5},
+  out["noisy"] = compare_sets(ctx, "elliptic-disk-saving", EllipticDiskSpec{}, {3, 5},
                               {12.0, 20.0, 32.0}, converged);
   // The regular zone patterns, whose arms the balance of fibre_arms.hpp makes consistent at most
-  // particles (it then dominates the set-up: smaller sets).
-  fmt::print("   regular patterns (no noise):\n");
-  out["regular"] =
-      compare_sets(ctx, "elliptic-disk-saving/regular", 0, {3, 4}, {12.0, 16.0, 24.0}, converged);
+  // particles; it then dominates the set-up, so the coarse grid of elliptic-disk.
+  fmt::print("   regular patterns (no noise), 10 × 20 zones:\n");
+  EllipticDiskSpec regular = coarse_grid();
+  regular.sweeps = 0;
+  out["regular"] = compare_sets(ctx, "elliptic-disk-saving/regular", regular, {3, 4},
+                                {8.0, 12.0, 16.0}, converged);
   finish_case(out, "a study: every run at its steady state (the saving is reported, not gated)",
               converged, start);
   return out;
 }
 
 Json run_elliptic_disk(const Context& ctx) {
-  EllipticDiskSpec spec;
-  spec.table.zones_xi /= 2; // 10 × 20 zones instead of 20 × 40
-  spec.table.zones_eta /= 2;
-  return run_densities(ctx, "elliptic-disk", spec, {3, 4, 5, 6}, {});
+  return run_densities(ctx, "elliptic-disk", coarse_grid(), {3, 4, 5, 6});
 }
 
 Json run_elliptic_disk_convergence(const Context& ctx) {
-  return run_densities(ctx, "elliptic-disk-convergence", EllipticDiskSpec{}, {3, 4, 5, 6, 7},
-                       {3, 4, 5});
+  return run_densities(ctx, "elliptic-disk-convergence", EllipticDiskSpec{}, {3, 4, 5, 6, 7});
+}
+
+Json run_elliptic_disk_regular(const Context& ctx) {
+  // Without noise the arms' balance (fibre_arms.hpp) applies at most particles and takes most of
+  // the set-up (489 s at 7,200 particles under load 20, growing faster than the count): the CI
+  // case's coarse grid.
+  EllipticDiskSpec spec = coarse_grid();
+  spec.sweeps = 0;
+  return run_densities(ctx, "elliptic-disk-regular", spec, {3, 4, 5});
 }
 
 } // namespace pd::verification

@@ -47,5 +47,6 @@ Json run_poisson_control_full(const Context& ctx);
 Json run_elliptic_disk(const Context& ctx);
 Json run_elliptic_disk_convergence(const Context& ctx);
 Json run_elliptic_disk_saving(const Context& ctx);
+Json run_elliptic_disk_regular(const Context& ctx);
 
 } // namespace pd::verification
