@@ -40,8 +40,9 @@
 // 7,200 and 134 of 20,000 particles balanced), so each particle's response to a homogeneous
 // strain is the kernel weights' (up to 21 % off, anisotropic) and does not improve with
 // refinement. `elliptic-disk-regular` (the CI grid without the noise, verification-full) measures
-// that: 0.62, 0.38 % at 1,800 and 3,200 particles; the paper's grid without noise at 7,200 gave
-// 0.20 % (L2 0.10 %), ten times below the noisy set's 2.09 %.
+// that: 0.62, 0.38, 0.27 % at 1,800, 3,200, 5,000 particles (L2 0.34, 0.20, 0.14 %), order 1.60
+// in spacing; the paper's grid without noise at 7,200 gave 0.20 % (L2 0.10 %), ten times below
+// the noisy set's 2.09 %.
 #include "cases.hpp"
 #include "elliptic_disk.hpp"
 #include "libpd/app/run.hpp"
