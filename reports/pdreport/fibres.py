@@ -77,8 +77,9 @@ def convergence(page: Page) -> str:
                    f'observed order {esc(ro.get("text", "–"))}.</p>')
     if runs:
         fig, ax = plt.subplots(figsize=(5.6, 3.8))
-        series = [("RMS over the particles", runs, "rms", "o-"),
-                  ("L2, volume-weighted", runs, "l2", "s--"),
+        grid = " × ".join(map(str, d.get("zones", [])))
+        series = [(f"RMS, {grid} zones", runs, "rms", "o-"),
+                  (f"L2 (volume-weighted), {grid} zones", runs, "l2", "s--"),
                   ("RMS beyond c/4 of the tips", runs, "rms_beyond_quarter_c_of_the_tips", "^:")]
         fast = page.rec.get("verify:elliptic-disk")
         if case != "elliptic-disk" and R.ok(fast):
