@@ -37,9 +37,13 @@ std::string body_text(const EllipticDiskSpec& s) {
   }
   const auto [a, b] = semi_axes(s);
   const long columns = std::max(1L, std::lround(2 * a / s.uniform_spacing));
+  // The box's rows are as far apart as its columns; an even number of them keeps every row off
+  // the crack (y = 0), where a particle would lose every arm but those along the crack.
+  const double pitch = 2 * a / static_cast<double>(columns);
+  const double half_height = pitch * std::ceil(b / pitch);
   return fmt::format("    graded: {{shape: box, box: [[{:.17g}, {:.17g}], [{:.17g}, {:.17g}]], "
                      "zones: [{}, 1], pattern: 1, seed: {}, sweeps: {}}}\n",
-                     -a, -b, a, b, columns, s.seed, s.sweeps);
+                     -a, -half_height, a, half_height, columns, s.seed, s.sweeps);
 }
 
 std::string scene_text(const EllipticDiskSpec& s) {

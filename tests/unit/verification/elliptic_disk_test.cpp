@@ -92,5 +92,19 @@ TEST(EllipticDisk, UniformSetHasOneSpacing) {
               1.0, 0.1);
 }
 
+TEST(EllipticDisk, UniformRowsStayOffTheCrack) {
+  // A row on y = 0 would put particles on the crack, with no arm across it but along it.
+  EllipticDiskSpec s = small_disk();
+  s.particles = DiskParticles::uniform;
+  s.sweeps = 0;
+  for (const double per_c : {6.0, 8.0, 12.0}) {
+    s.uniform_spacing = s.table.focal_half_distance / per_c;
+    const Scene scene = elliptic_disk_scene(s);
+    for (const Vec3& p : scene.model.bodies.front().points->position) {
+      ASSERT_GT(std::abs(p[1]), 0.4 * s.uniform_spacing) << "c/" << per_c;
+    }
+  }
+}
+
 } // namespace
 } // namespace pd::verification
