@@ -43,6 +43,12 @@
 // that: 0.62, 0.38, 0.27 % at 1,800, 3,200, 5,000 particles (L2 0.34, 0.20, 0.14 %), order 1.60
 // in spacing; the paper's grid without noise at 7,200 gave 0.20 % (L2 0.10 %), ten times below
 // the noisy set's 2.09 %.
+//
+// elliptic-disk-saving (measured 2026-11-27, load 17–20 on 2 cores): without noise the uniform
+// sets' L2 error is 1.06, 0.72, 0.56 % at 1,156, 2,592, 4,624 particles, the graded ones' 0.34 %
+// at 1,800 and 0.20 % at 3,200: a uniform set of the same error needs about 8× and 16× the
+// particles and 58× and 320× the time (extrapolated). With the noise the uniform sets' error
+// does not fall (2.9, 4.2, 1.9 %), so there is no match.
 #include "cases.hpp"
 #include "elliptic_disk.hpp"
 #include "libpd/app/run.hpp"
