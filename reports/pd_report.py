@@ -18,6 +18,7 @@ Stages (each cached under DIR/cache/ by a hash of its inputs; see reports/README
   kernel       `pd-kernel-bench --benchmark_format=json`.
   peer         `pd bench model-a-benchmark.yaml --lammps lmp --json`: libpd/LAMMPS alternated.
   lammps       `bash reports/lammps/run_lammps_bench.sh`.
+  fibre-bench  `pd bench SCENE --bond-model M --json`: the virtual-fibre and bond-based kernels alternated.
 Output: DIR/index.html, DIR/*.png, DIR/report.json, DIR/data/*.json (stage records).
 Exit code: 0 all stages ran and all gates passed, 2 a verification gate failed, 1 a stage failed.
 """
@@ -107,6 +108,7 @@ def build_stages(ctx: S.Ctx, records: dict[str, dict]) -> list[S.Stage]:
     stages.append(S.stability_stage(ctx, FULL_STABILITY_SCENES if ctx.full else DEFAULT_STABILITY_SCENES))
     stages += [S.compare_stage(ctx, "dynamic"), S.compare_stage(ctx, "quasistatic")]
     stages += [S.bench_stage(ctx), S.kernel_stage(ctx), S.peer_stage(ctx), S.lammps_stage(ctx)]
+    stages.append(S.fibre_bench_stage(ctx))
     stages.append(S.mpi_stage(ctx))
     return stages
 

@@ -1,5 +1,6 @@
 // pd bench SCENE [--steps N] [--repeats N] [--threads N] [--stretch exact|modified|fast]
-//                [--kernel simd|scalar] [--damage] [--lammps LMP [--lammps-input F]
+//                [--kernel simd|scalar] [--damage] [--bond-model micro-elastic|virtual-fibres]
+//                [--lammps LMP [--lammps-input F]
 //                [--lammps-steps N] [--lammps-var NAME=VALUE ...]] [--json]
 // Force-evaluation throughput in bond updates per second: the median of several repeats of N
 // force evaluations on a slightly deformed configuration, after an untimed warm-up (a second
@@ -32,6 +33,7 @@ struct BenchArgs {
   int repeats = 5;
   int threads = 0;
   std::string stretch;
+  std::string bond_model; ///< empty: the scene's
   std::string kernel = std::string(name_of(KernelPath::simd));
   bool damage = false;
   std::string lammps;                         ///< LAMMPS binary; empty: no LAMMPS runs
@@ -186,6 +188,11 @@ int bench(const BenchArgs& a) {
   if (a.damage) {
     scene.model.effects.damage = true; // with the scene's critical stretch: the cost of checking
   }
+  if (!a.bond_model.empty()) {
+    // The same particles and the scene's corrections, the other law (and its own family: see
+    // the README on what each model keeps of a `gradient`-weighted lattice).
+    scene.model.effects.bond_model = *from_name<BondModel>(a.bond_model);
+  }
   Model model = build_model(scene.model);
   auto forces = make_force_evaluator(model, *from_name<KernelPath>(a.kernel));
   const auto timings = time_evaluations(a, model, *forces, a.repeats);
@@ -226,6 +233,8 @@ Command add_bench_command(CLI::App& app) {
   cmd->add_option("--kernel", a->kernel, "bond loop: simd (default) or the scalar reference")
       ->check(CLI::IsMember(enum_word_list<KernelPath>()));
   cmd->add_flag("--damage", a->damage, "switch the damage effect on");
+  cmd->add_option("--bond-model", a->bond_model, "override the scene's bond model")
+      ->check(CLI::IsMember(enum_word_list<BondModel>()));
   add_lammps_options(*cmd, *a);
   cmd->add_flag("--json", a->json, "machine-readable output");
   return {cmd, [a] { return bench(*a); }};

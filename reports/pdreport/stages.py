@@ -637,6 +637,51 @@ def peer_stage(ctx: Ctx) -> Stage:
                  [ctx.pd, scene, inp] + ([Path(lmp)] if lmp else []), fn, default_seconds=60)
 
 
+# The virtual-fibre kernel beside the bond-based one on the same particles (pd bench --bond-model).
+# Model A sets no correction, so both models hold the same bond family; block-tension takes the
+# library's defaults, under which they do not (`gradient` weights drop the bond-based model's bonds
+# beyond 2λ and its ghosts reach only those; the fibre model keeps the whole horizon).
+FIBRE_BENCH_SCENES = ("verification/scenes/model-a-benchmark.yaml", "verification/scenes/block-tension.yaml")
+BOND_MODELS = ("micro-elastic", "virtual-fibres")
+
+
+def fibre_bench_stage(ctx: Ctx) -> Stage:
+    rounds = 5 if ctx.full else 3
+    configs = [(scene, model) for scene in FIBRE_BENCH_SCENES for model in BOND_MODELS]
+    cmds = [[str(ctx.pd), "bench", str(ctx.root / scene), "--threads", "1", "--bond-model", model,
+             "--steps", "20", "--repeats", "3", "--json"] for scene, model in configs]
+
+    def fn(ctx: Ctx, st: Stage) -> dict:
+        # Rounds alternate the two models, so both see the same load; the ratio is taken per round.
+        rates: dict[tuple[str, str], list[dict]] = {c: [] for c in configs}
+        loads = []
+        for r in range(rounds):
+            loads.append(_loadavg())
+            for (scene, model), cmd in zip(configs, cmds):
+                p = run(ctx, cmd, f"fibre-bench-{Path(scene).stem}-{model}-{r}", env=st.env)
+                j = parse_json_output(p.stdout)
+                if not isinstance(j, dict) or "bond_updates_per_second" not in j:
+                    raise StageFailed(f"`{shlex.join(cmd)}` printed no rate")
+                rates[(scene, model)].append(j)
+        out = []
+        for scene in FIBRE_BENCH_SCENES:
+            runs = {m: rates[(scene, m)] for m in BOND_MODELS}
+            ratios = [f["bond_updates_per_second"] / b["bond_updates_per_second"]
+                      for b, f in zip(runs["micro-elastic"], runs["virtual-fibres"])]
+            out.append({"scene": scene, "ratio_median": sorted(ratios)[len(ratios) // 2], "ratios": ratios,
+                        "models": {m: {"particles": v[0]["particles"], "bonds": v[0]["bonds"],
+                                       "kernel": v[0]["kernel"],
+                                       "rates": [x["bond_updates_per_second"] for x in v],
+                                       "median": sorted(x["bond_updates_per_second"] for x in v)[len(v) // 2],
+                                       "under_load": any(x["under_load"] for x in v)}
+                                   for m, v in runs.items()}})
+        return {"rounds": rounds, "scenes": out, "loadavg": loads + [_loadavg()]}
+
+    return Stage("fibre-bench", "bench", "virtual-fibre vs bond-based kernel (pd bench --bond-model)", cmds,
+                 [ctx.pd] + [ctx.root / s for s in FIBRE_BENCH_SCENES], fn, default_seconds=60,
+                 env={"OMP_NUM_THREADS": "1", "OMP_WAIT_POLICY": "passive"})
+
+
 def mpi_stage(ctx: Ctx) -> Stage:
     """Strong scaling on Model C over 1, 2 and 4 MPI ranks (reports/mpi/scaling.py), and the
     bitwise-equality of their probes and energies."""

@@ -44,5 +44,9 @@ Json run_crack_opening(const Context& ctx);
 Json run_fracture_stop(const Context& ctx);
 Json run_poisson_control(const Context& ctx);
 Json run_poisson_control_full(const Context& ctx);
+Json run_elliptic_disk(const Context& ctx);
+Json run_elliptic_disk_convergence(const Context& ctx);
+Json run_elliptic_disk_saving(const Context& ctx);
+Json run_elliptic_disk_regular(const Context& ctx);
 
 } // namespace pd::verification

@@ -150,6 +150,21 @@ const std::vector<Case>& all_cases() {
        run_poisson_control},
       {"poisson-control-full", "poisson-control over finer sections (slow)",
        run_poisson_control_full},
+      {"elliptic-disk",
+       "virtual fibres: graded elliptical disk held at eq. 116, RMS error over 4 densities falls "
+       "(Olsson et al. Fig. 10, coarse zone grid)",
+       run_elliptic_disk},
+      {"elliptic-disk-convergence",
+       "elliptic-disk on the paper's zone grid, 7,200 to 39,200 particles, Fig. 10 (slow)",
+       run_elliptic_disk_convergence},
+      {"elliptic-disk-regular",
+       "elliptic-disk without the Monte Carlo noise: regular zone patterns, 1,800 to 5,000 "
+       "particles (slow: the arms' balance)",
+       run_elliptic_disk_regular},
+      {"elliptic-disk-saving",
+       "elliptic-disk: particles and time of a uniform particle set at the graded set's RMS error "
+       "(slow)",
+       run_elliptic_disk_saving},
   });
   return cases;
 }

@@ -1,0 +1,110 @@
+// The elliptical disk's scene (verification/cases/elliptic_disk.hpp): the particles the paper's
+// grid gives, the boundary zone held at eq. 116 and nothing else, the crack cutting arms, and
+// the refusal of a held zone thinner than a horizon. A small grid keeps each build well under a
+// second.
+#include "elliptic_disk.hpp"
+#include "libpd/discretisation/model.hpp"
+
+#include <cmath>
+#include <gtest/gtest.h>
+#include <stdexcept>
+
+namespace pd::verification {
+namespace {
+
+EllipticDiskSpec small_disk() {
+  EllipticDiskSpec s;
+  s.table.zones_xi = 12; // 6 zones along ξ, 16 around
+  s.table.zones_eta = 8;
+  s.pattern = 4;
+  return s;
+}
+
+TEST(EllipticDisk, ParticlesFillThePapersZones) {
+  const EllipticDiskSpec s = small_disk();
+  const Scene scene = elliptic_disk_scene(s);
+  const PointCloud& cloud = *scene.model.bodies.front().points;
+  EXPECT_EQ(cloud.count(), 6U * 16U * 16U);
+  // Every particle inside the ellipse ξ ≤ ξ_max, and the volumes tile its area π a b.
+  double area = 0;
+  for (std::size_t i = 0; i < cloud.count(); ++i) {
+    EXPECT_LE(elliptic_coordinates(cloud.position[i][0], cloud.position[i][1],
+                                   s.table.focal_half_distance)
+                  .first,
+              s.xi_max + 1e-12);
+    area += cloud.volume[i];
+  }
+  const double c = s.table.focal_half_distance;
+  EXPECT_NEAR(area / (std::numbers::pi * c * c * std::cosh(s.xi_max) * std::sinh(s.xi_max)), 1.0,
+              0.01);
+}
+
+TEST(EllipticDisk, BoundaryZoneIsHeldAtEquation116AndNothingElse) {
+  const EllipticDiskSpec s = small_disk();
+  const Scene scene = elliptic_disk_scene(s);
+  const Model m = build_model(scene);
+  std::size_t held = 0;
+  for (std::size_t i = 0; i < m.body_particle_count(); ++i) {
+    held += s.held(m.particles.position[i]) ? 1 : 0;
+  }
+  ASSERT_GT(held, 0U);
+  // x and y of each held particle, at eq. 116 there; no other particle constrained.
+  EXPECT_EQ(m.constraints.size(), 2 * held);
+  for (const Constraint& k : m.constraints) {
+    const Vec3& x = m.particles.position[k.particle];
+    EXPECT_TRUE(s.held(x));
+    EXPECT_DOUBLE_EQ(k.value, s.exact_displacement(x)[k.component]);
+  }
+  // The crack between the focal points cuts arms, and the model is the fibre model in plane
+  // strain with Table 1's ν.
+  ASSERT_EQ(m.bonds_cut_by_crack.size(), 1U);
+  EXPECT_GT(m.bonds_cut_by_crack.front(), 0U);
+  EXPECT_EQ(m.effects.bond_model, BondModel::virtual_fibres);
+  EXPECT_EQ(m.spec.dimension.plane, PlaneMode::plane_strain);
+  EXPECT_DOUBLE_EQ(m.spec.materials.front().poisson_ratio, s.table.poisson_ratio);
+}
+
+TEST(EllipticDisk, RefusesAHeldZoneThinnerThanAHorizon) {
+  EllipticDiskSpec s = small_disk();
+  s.boundary_rings = 0.25;
+  EXPECT_THROW(elliptic_disk_scene(s), std::invalid_argument);
+}
+
+TEST(EllipticDisk, UniformSetHasOneSpacing) {
+  EllipticDiskSpec s = small_disk();
+  s.particles = DiskParticles::uniform;
+  s.uniform_spacing = s.table.focal_half_distance / 6;
+  const Scene scene = elliptic_disk_scene(s);
+  const PointCloud& cloud = *scene.model.bodies.front().points;
+  const double c = s.table.focal_half_distance;
+  const double a = c * std::cosh(s.xi_max), b = c * std::sinh(s.xi_max);
+  double smallest = cloud.volume.front(), largest = smallest;
+  for (std::size_t i = 0; i < cloud.count(); ++i) {
+    const Vec3& p = cloud.position[i];
+    EXPECT_LE((p[0] / a) * (p[0] / a) + (p[1] / b) * (p[1] / b), 1.0);
+    smallest = std::min(smallest, cloud.volume[i]);
+    largest = std::max(largest, cloud.volume[i]);
+  }
+  EXPECT_NEAR(largest / smallest, 1.0, 0.05);
+  // About π a b / h² particles (the columns are rounded to whole rows).
+  EXPECT_NEAR(static_cast<double>(cloud.count()) * s.uniform_spacing * s.uniform_spacing /
+                  (std::numbers::pi * a * b),
+              1.0, 0.1);
+}
+
+TEST(EllipticDisk, UniformRowsStayOffTheCrack) {
+  // A row on y = 0 would put particles on the crack, with no arm across it but along it.
+  EllipticDiskSpec s = small_disk();
+  s.particles = DiskParticles::uniform;
+  s.sweeps = 0;
+  for (const double per_c : {6.0, 8.0, 12.0}) {
+    s.uniform_spacing = s.table.focal_half_distance / per_c;
+    const Scene scene = elliptic_disk_scene(s);
+    for (const Vec3& p : scene.model.bodies.front().points->position) {
+      ASSERT_GT(std::abs(p[1]), 0.4 * s.uniform_spacing) << "c/" << per_c;
+    }
+  }
+}
+
+} // namespace
+} // namespace pd::verification
