@@ -44,5 +44,7 @@ Json run_crack_opening(const Context& ctx);
 Json run_fracture_stop(const Context& ctx);
 Json run_poisson_control(const Context& ctx);
 Json run_poisson_control_full(const Context& ctx);
+Json run_griffith(const Context& ctx);
+Json run_griffith_full(const Context& ctx);
 
 } // namespace pd::verification

@@ -150,6 +150,12 @@ const std::vector<Case>& all_cases() {
        run_poisson_control},
       {"poisson-control-full", "poisson-control over finer sections (slow)",
        run_poisson_control_full},
+      {"griffith",
+       "virtual fibres: failure stress of a cracked elliptical disk vs the elongation limit and "
+       "the crack length (Griffith scaling, Olsson et al. Fig. 14), coarse disk",
+       run_griffith},
+      {"griffith-full", "griffith on a finer disk over 11 elongation limits (slow)",
+       run_griffith_full},
   });
   return cases;
 }
