@@ -46,5 +46,6 @@ Json run_poisson_control(const Context& ctx);
 Json run_poisson_control_full(const Context& ctx);
 Json run_griffith(const Context& ctx);
 Json run_griffith_full(const Context& ctx);
+Json run_griffith_table1(const Context& ctx);
 
 } // namespace pd::verification

@@ -156,6 +156,10 @@ const std::vector<Case>& all_cases() {
        run_griffith},
       {"griffith-full", "griffith on a finer disk over 11 elongation limits (slow)",
        run_griffith_full},
+      {"griffith-table1",
+       "griffith at Table 1's particle density (25,000 particles), three elongation limits "
+       "(slow)",
+       run_griffith_table1},
   });
   return cases;
 }
