@@ -43,18 +43,28 @@ def section(page: Page) -> str:
 def summary_table(d: dict) -> str:
     pdv = d.get("pd") or {}
     sc = d.get("crack_length_scaling") or {}
+    sm = d.get("crack_length_scaling_half_delta") or {}
     res = d.get("resolution") or {}
     runs = d.get("sweep") or []
     particles = runs[0].get("particles") if runs else None
     rows = [["slope of σ_f/σ_y against √(δ_e/c)", num_td(fnum(pdv.get("slope")))],
             ["intercept", num_td(fnum(pdv.get("intercept")))],
             ["R² (gate ≥ 0.98)", num_td(fnum(pdv.get("r_squared")))],
-            ["σ_f(c/2) / σ_f(c) at δ_e = c/1000 (√2 = 1.4142)", num_td(fnum(sc.get("ratio")))],
-            ["its error against √2 (gate 5 %)", num_td(pct(sc.get("error")))],
+            [f"σ_f(c/2) / σ_f(c) at δ_e = c/{_divisor(sc)} (√2 = 1.4142)", num_td(fnum(sc.get("ratio")))],
+            ["its error against √2 (gate 5 %" + ("" if sc.get("gated", True) else ", not gated here") + ")",
+             num_td(pct(sc.get("error")))],
+            ["the same in the remote stress S (reported)", num_td(pct(sc.get("remote_ratio_error")))],
+            [f"σ_f(c/2) / σ_f(c) at δ_e = c/{_divisor(sm)}, half the smallest (reported)",
+             num_td(f"{fnum(sm.get('ratio'))} ({pct(sm.get('error'))})")],
             ["particles (paper: Table 1)", num_td(f"{fnum(particles)} ({fnum(res.get('paper_particles'))})")],
             ["load step ΔS/σ_y", num_td(fnum(res.get("load_step_over_yield")))],
             ["wall time", num_td(f"{fnum(d.get('wall_seconds'))} s")]]
     return table(["", ""], rows, 'id="griffith-table"')
+
+
+def _divisor(pair: dict) -> str:
+    v = pair.get("long_delta_over_c")
+    return f"{1 / v:.0f}" if R.is_number(v) and v > 0 else "?"
 
 
 def scaling_figure(page: Page, case: str, d: dict) -> str:
@@ -69,11 +79,13 @@ def scaling_figure(page: Page, case: str, d: dict) -> str:
         lo, hi = 0.0, max(x) * 1.05
         ax.plot([lo, hi], [pdv["intercept"] + pdv["slope"] * lo, pdv["intercept"] + pdv["slope"] * hi],
                 "--", color="#555", label=f"least squares, R² = {pdv.get('r_squared', float('nan')):.4f}")
-    sc = d.get("crack_length_scaling") or {}
-    short = sc.get("short_run") or {}
-    if short.get("failed"):
-        ax.plot([short["sqrt_delta_over_c"]], [short["failure_over_yield"]], "s", color="#c0392b",
-                label="crack c/2, same δ_e and outer boundary")
+    for key, colour in (("crack_length_scaling", "#c0392b"), ("crack_length_scaling_half_delta", "#e67e22")):
+        pair = d.get(key) or {}
+        runs = [r for r in (pair.get("long_run"), pair.get("short_run")) if r and r.get("failed")]
+        if runs:
+            ax.plot([r["sqrt_delta_over_c"] for r in runs], [r["failure_over_yield"] for r in runs], "s",
+                    color=colour, mfc="none" if key.endswith("half_delta") else colour,
+                    label=f"c and c/2 at δ_e = c/{_divisor(pair)}")
     ax.set_xlabel("√(δ_e / c)")
     ax.set_ylabel("σ_failure / σ_yield")
     ax.set_xlim(left=0)
