@@ -15,7 +15,7 @@
 // load–displacement history, once σ_b has fallen `failure_drop` below it (the crack has run).
 // The disk's outer boundary is ξ_max = 2 (semi-major axis 3.76 c), not the builder's π/2
 // (2.51 c): Griffith's law is for a crack in a large plate, and the plastic zone at failure
-// reaches about 2 c from a tip at the largest δ_e (`plastic_reach_over_c_at_peak`).
+// reaches 1.7 c from a tip at the largest δ_e (`plastic_reach_over_c_at_peak`).
 //
 // Griffith (eqs. 106–109): σ_f/σ_y ≈ ζ with ζ ∝ √(δ/c), so σ_f/σ_y against √(δ_e/c) is a
 // straight line (eq. 117) whose slope only a numerical experiment gives (§10.5). Gates: R² of
