@@ -165,6 +165,16 @@ const std::vector<Case>& all_cases() {
        "elliptic-disk: particles and time of a uniform particle set at the graded set's RMS error "
        "(slow)",
        run_elliptic_disk_saving},
+      {"griffith",
+       "virtual fibres: failure stress of a cracked elliptical disk vs the elongation limit and "
+       "the crack length (Griffith scaling, Olsson et al. Fig. 14), coarse disk",
+       run_griffith},
+      {"griffith-full", "griffith on a finer disk over 11 elongation limits (slow)",
+       run_griffith_full},
+      {"griffith-table1",
+       "griffith at Table 1's particle density (25,000 particles), three elongation limits "
+       "(slow)",
+       run_griffith_table1},
   });
   return cases;
 }
