@@ -216,7 +216,7 @@ private:
     double check_seconds = 0, assembly_seconds = 0, factorisation_seconds = 0;
   };
 
-  Factored factor_system() const {
+  Factored factor_system(bool allow_preconditioner) const {
     using clock = std::chrono::steady_clock;
     const auto t0 = clock::now();
     Factored f;
@@ -229,7 +229,7 @@ private:
     // make it definite), and close to K in energy, so that conjugate gradients on K converge in a
     // few iterations with P as preconditioner (solve). K itself is applied matrix-free.
     f.dofs = map_dofs(model_);
-    if (!model_.extrapolated.empty() && f.dofs.every_dependant_folds() &&
+    if (allow_preconditioner && !model_.extrapolated.empty() && f.dofs.every_dependant_folds() &&
         f.dofs.free_dofs.size() >= preconditioned_from_unknowns) {
       f.dofs = map_dofs(model_, refit_extrapolation(model_, preconditioner_fit_radius));
       f.exact = false;
@@ -288,11 +288,33 @@ private:
     return f;
   }
 
+  /// The linear solution and Newton (attempt) with P's factor where factor_system chooses it;
+  /// where that does not converge, once more from the same start with K's own factor. P is only
+  /// close to K in energy where the refit changes little: with `volume_correction: none` on the
+  /// plate (every bond to δ kept, ghosts a whole horizon deep) Newton preconditioned by P stalled
+  /// at 3.4e-4 of the load after 50 steps, where K's factor converges in 3.
   void solve(State& st) {
+    const std::vector<double> start = st.position;
+    fell_back_ = false;
+    Factored f = factor_system(true);
+    if (!attempt(st, f) && !f.exact) {
+      st.position = start;
+      fell_back_ = true;
+      f = factor_system(false);
+      attempt(st, f);
+    }
+    // With damage a solve that did not converge is reported (converged_solves) rather than
+    // thrown: the break event that follows changes the problem, and a load-stepping driver
+    // records each level's state.
+    if (!newton_converged_ && !model_.effects.damage) {
+      throw std::runtime_error(fmt::format("static solve did not converge: {}", report_));
+    }
+  }
+
+  bool attempt(State& st, const Factored& f) {
     using clock = std::chrono::steady_clock;
     linear_iterations_ = cg_iterations_ = 0;
     linear_seconds_ = 0;
-    const Factored f = factor_system();
     const DofMap& d = f.dofs;
     const SparseFactorisation& factor = *f.factor;
     const auto n = static_cast<Eigen::Index>(d.free_dofs.size());
@@ -355,7 +377,11 @@ private:
       // (clamped beam: 7.2e-9 → 6.9e-9 of the load for a third step, floor 9.6e-9; on the
       // plate such a step took 0.35 s of a 1.4 s Newton phase); or stalled above it.
       const bool stalled = residual <= acceptable && residual > 0.5 * previous;
-      if (residual <= newton_tolerance || residual <= floor || stalled ||
+      // With P's factor Newton converges while P is close to K (the plate: 3 steps; a 0.8 m
+      // strip whose linear solution leaves 1.19 of the load: 9, not monotonically); where it
+      // takes longer than that, K's factor is cheaper (solve).
+      const bool slow_with_p = !f.exact && iterations >= max_newton_iterations_with_p;
+      if (residual <= newton_tolerance || residual <= floor || stalled || slow_with_p ||
           iterations >= max_newton_iterations) {
         break;
       }
@@ -366,12 +392,7 @@ private:
     const auto t3 = clock::now();
     newton_converged_ = residual <= acceptable;
     record(f, iterations, residual, floor, std::chrono::duration<double>(t3 - t2).count());
-    // With damage a solve that did not converge is reported (converged_solves) rather than
-    // thrown: the break event that follows changes the problem, and a load-stepping driver
-    // records each level's state.
-    if (!newton_converged_ && !model_.effects.damage) {
-      throw std::runtime_error(fmt::format("static solve did not converge: {}", report_));
-    }
+    return newton_converged_;
   }
 
   void record(const Factored& f, std::size_t iterations, double residual, double floor,
@@ -394,6 +415,7 @@ private:
     j["newton_iterations"] = iterations;
     j["preconditioner"] =
         f.exact ? "K" : fmt::format("P (refit {:.3g} λ)", preconditioner_fit_radius);
+    j["preconditioner_fell_back"] = fell_back_; // P did not converge: solved again with K
     j["linear_cg_iterations"] = linear_iterations_;
     j["linear_seconds"] = linear_seconds_;
     j["linear_residual"] = linear_residual_;
@@ -514,6 +536,7 @@ private:
   static constexpr double linear_tolerance = 1e-10;
   static constexpr std::size_t max_linear_iterations = 500;
   static constexpr double newton_tolerance = 1e-10;
+  static constexpr std::size_t max_newton_iterations_with_p = 12;
   /// A residual that stopped falling is accepted below this (relative to the load), or below
   /// round_off_margin × the round-off floor where that is higher (kernel/round_off.hpp).
   static constexpr double acceptable_residual = 1e-6;
@@ -523,6 +546,7 @@ private:
   ForceEvaluator& forces_;
   bool solved_ = false;
   bool newton_converged_ = false;
+  bool fell_back_ = false;
   std::size_t linear_iterations_ = 0, cg_iterations_ = 0;
   double linear_seconds_ = 0, linear_residual_ = 0;
   std::string report_;
