@@ -1,0 +1,33 @@
+#include "libpd/core/blas.hpp"
+
+#include <cstring>
+#include <dlfcn.h>
+#include <strings.h>
+
+namespace pd {
+
+std::string openblas_core() {
+  // Looked up at run time: the BLAS is whichever libblas.so.3 the system's alternatives name.
+  using CoreName = char* (*)();
+  const auto name = reinterpret_cast<CoreName>(dlsym(RTLD_DEFAULT, "openblas_get_corename"));
+  const char* core = name ? name() : nullptr;
+  return core ? std::string(core) : std::string();
+}
+
+std::string openblas_core_for_this_cpu() {
+  if (strcasecmp(openblas_core().c_str(), "prescott") != 0) {
+    return {};
+  }
+#if defined(__x86_64__) || defined(__i386__)
+  __builtin_cpu_init();
+  if (__builtin_cpu_supports("avx512f")) {
+    return "SkylakeX";
+  }
+  if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma")) {
+    return "Haswell";
+  }
+#endif
+  return {};
+}
+
+} // namespace pd
