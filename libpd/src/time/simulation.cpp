@@ -56,6 +56,7 @@ Simulation::Simulation(Model& model, const SolverSpec& solver, const InitialSpec
   is.ramp = ramp_;
   is.arkode = solver.arkode;
   is.cfl_fraction = solver.safety;
+  is.force_tolerance = solver.steady.force_tolerance;
   if (solver.integrator == IntegratorKind::arkode) {
     // Adaptive ARKode: ERKStepSetStabilityFn gets the eq. 31 step scaled by the table's β/2.
     is.stable_dt = dt_stable_ * make_integrator(is, model, *forces_)->stability_scale();

@@ -247,7 +247,7 @@ TEST(StaticSolver, LargeModelsWithGhostsSolveByCgPreconditionedWithTheRefittedOp
   // 40 × 40 × 5 particles (24,000 unknowns, above preconditioned_from_unknowns) with the default
   // ghost layers, clamped by a quadratic mirror at x = 0: the factor is of P (the ghosts refitted
   // within 1.5 λ), K is applied matrix-free. A K that is not P's symmetric positive definite
-  // partner would stop CG short of 1e-10 (500 iterations); Newton then brings the kernel's own
+  // partner would stop CG short of its tolerance (500 iterations); Newton then brings the kernel's own
   // residual to the tolerance, and the deflection must be the strip's.
   const std::string text = R"(title: clamped plate strip
 dimension: 3

@@ -189,6 +189,9 @@ struct IntegratorSettings {
   /// Step bound handed to ERKStepSetStabilityFn for adaptive ARKode [s]; 0: none.
   double stable_dt = 0;
   double cfl_fraction = 0.8; ///< fraction of stable_dt the adaptive controller may use
+  /// static: the residual, relative to the load, the solve must reach (the scene's
+  /// solver.steady.force_tolerance, which dynamic relaxation is held to); 0: the solver's own.
+  double force_tolerance = 0;
 };
 
 /// Throws std::invalid_argument for combinations that cannot run (arkode without SUNDIALS, with
