@@ -107,7 +107,9 @@ def build_stages(ctx: S.Ctx, records: dict[str, dict]) -> list[S.Stage]:
     stages += [S.sweep_stage(ctx, c, listed) for c in sweep_cases]
     stages.append(S.stability_stage(ctx, FULL_STABILITY_SCENES if ctx.full else DEFAULT_STABILITY_SCENES))
     stages += [S.compare_stage(ctx, "dynamic"), S.compare_stage(ctx, "quasistatic")]
-    stages += [S.bench_stage(ctx), S.kernel_stage(ctx), S.peer_stage(ctx), S.lammps_stage(ctx)]
+    stages += [S.bench_stage(ctx), S.kernel_stage(ctx), S.peer_stage(ctx)]
+    if ctx.full:  # LAMMPS's own thread scan; `peer` measures the ratio in every report
+        stages.append(S.lammps_stage(ctx))
     stages.append(S.fibre_bench_stage(ctx))
     stages.append(S.mpi_stage(ctx))
     return stages

@@ -127,6 +127,10 @@ def kernel_block(page: Page) -> str:
 
 def lammps_block(page: Page, libpd_1t: dict | None) -> str:
     rec = page.rec.get("lammps")
+    if rec is None:
+        return ('<p class="note">LAMMPS\'s own runs on 1 and 2 threads '
+                "(<code>reports/lammps/run_lammps_bench.sh</code>) are part of the --full report; "
+                "the comparison above alternates libpd and LAMMPS in every report.</p>")
     if not R.ok(rec):
         return failed_box(rec, "LAMMPS peer benchmark")
     j = rec["result"]
