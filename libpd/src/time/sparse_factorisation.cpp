@@ -15,7 +15,6 @@
 #ifdef LIBPD_HAVE_SUITESPARSE
 #include <Eigen/UmfPackSupport>
 #include <algorithm>
-#include <array>
 #include <cholmod.h>
 #include <chrono>
 #endif
@@ -153,9 +152,6 @@ public:
   Cholmod& operator=(const Cholmod&) = delete;
 
   Eigen::VectorXd solve(const Eigen::VectorXd& b) const override {
-    if (!single_.empty()) {
-      return solve_single(b);
-    }
     cholmod_dense rhs{};
     rhs.nrow = rhs.nzmax = rhs.d = static_cast<std::size_t>(b.size());
     rhs.ncol = 1;
@@ -186,15 +182,6 @@ public:
   std::size_t factor_nonzeros() const override {
     return factor_->is_super ? factor_->xsize : factor_->nzmax;
   }
-  void store_single_precision() override {
-    cholmod_factor& L = *factor_;
-    if (!L.is_super || !L.is_ll || L.x == nullptr || L.itype != CHOLMOD_INT) {
-      return;
-    }
-    const auto* x = static_cast<const double*>(L.x);
-    single_.assign(x, x + L.xsize);
-    L.x = cholmod_free(L.xsize, sizeof(double), L.x, &common_);
-  }
   std::size_t factor_bytes() const override {
     const cholmod_factor& L = *factor_;
     const std::size_t index = L.itype == CHOLMOD_LONG ? sizeof(SuiteSparse_long) : sizeof(int);
@@ -202,8 +189,7 @@ public:
     // super, pi, px pointers; simplicial: i, and p, nz, next, prev.
     const std::size_t integers =
         2 * L.n + (L.is_super ? L.ssize + 3 * (L.nsuper + 1) : L.nzmax + 4 * L.n + 2);
-    const std::size_t value = single_.empty() ? sizeof(double) : sizeof(float);
-    return factor_nonzeros() * value + integers * index;
+    return factor_nonzeros() * sizeof(double) + integers * index;
   }
 
 private:
@@ -224,90 +210,8 @@ private:
     return A;
   }
 
-  /// K⁻¹ b through the supernodes of L (L Lᵀ = K(Perm, Perm)) with the values in single_,
-  /// summed in double; as cholmod_solve does, but with plain loops instead of BLAS. Each
-  /// supernode is a dense column-major block whose first rows are its own columns, the rest
-  /// scattered to the rows s[pi[k] + nscol …].
-  Eigen::VectorXd solve_single(const Eigen::VectorXd& b) const {
-    const cholmod_factor& L = *factor_;
-    const auto* perm = static_cast<const int*>(L.Perm);
-    const auto* super = static_cast<const int*>(L.super);
-    const auto* pi = static_cast<const int*>(L.pi);
-    const auto* px = static_cast<const int*>(L.px);
-    const auto* rows = static_cast<const int*>(L.s);
-    const auto n = static_cast<std::size_t>(L.n);
-    std::vector<double>& z = work_;
-    z.resize(n);
-    for (std::size_t k = 0; k < n; ++k) {
-      z[k] = b[perm[k]];
-    }
-    std::vector<double>& below = below_;
-    for (std::size_t k = 0; k < L.nsuper; ++k) { // L y = P b
-      const auto first = static_cast<std::size_t>(super[k]);
-      const auto ncol = static_cast<std::size_t>(super[k + 1] - super[k]);
-      const auto nrow = static_cast<std::size_t>(pi[k + 1] - pi[k]);
-      const float* block = single_.data() + px[k];
-      below.assign(nrow - ncol, 0.0);
-      for (std::size_t j = 0; j < ncol; ++j) {
-        const float* column = block + j * nrow;
-        const double zj = z[first + j] / column[j];
-        z[first + j] = zj;
-        for (std::size_t i = j + 1; i < ncol; ++i) {
-          z[first + i] -= column[i] * zj;
-        }
-        for (std::size_t i = ncol; i < nrow; ++i) {
-          below[i - ncol] += column[i] * zj;
-        }
-      }
-      for (std::size_t i = ncol; i < nrow; ++i) {
-        z[static_cast<std::size_t>(rows[pi[k] + static_cast<int>(i)])] -= below[i - ncol];
-      }
-    }
-    for (std::size_t k = L.nsuper; k-- > 0;) { // Lᵀ x = y
-      const auto first = static_cast<std::size_t>(super[k]);
-      const auto ncol = static_cast<std::size_t>(super[k + 1] - super[k]);
-      const auto nrow = static_cast<std::size_t>(pi[k + 1] - pi[k]);
-      const float* block = single_.data() + px[k];
-      below.resize(nrow - ncol);
-      for (std::size_t i = ncol; i < nrow; ++i) {
-        below[i - ncol] = z[static_cast<std::size_t>(rows[pi[k] + static_cast<int>(i)])];
-      }
-      for (std::size_t j = ncol; j-- > 0;) {
-        const float* column = block + j * nrow;
-        const double sum = z[first + j] -
-                           dot(column + j + 1, z.data() + first + j + 1, ncol - j - 1) -
-                           dot(column + ncol, below.data(), nrow - ncol);
-        z[first + j] = sum / column[j];
-      }
-    }
-    Eigen::VectorXd x(b.size());
-    for (std::size_t k = 0; k < n; ++k) {
-      x[perm[k]] = z[k];
-    }
-    return x;
-  }
-
-  /// Σ a_i b_i in eight fixed partial sums: the compiler vectorises it (one running sum would be
-  /// a chain of dependent additions), and the order, hence the result, stays the same.
-  static double dot(const float* a, const double* b, std::size_t n) {
-    constexpr std::size_t lanes = 8;
-    std::array<double, lanes> s{};
-    std::size_t i = 0;
-    for (; i + lanes <= n; i += lanes) {
-      for (std::size_t l = 0; l < lanes; ++l) {
-        s[l] += a[i + l] * b[i + l];
-      }
-    }
-    for (; i < n; ++i) {
-      s[0] += a[i] * b[i];
-    }
-    return ((s[0] + s[1]) + (s[2] + s[3])) + ((s[4] + s[5]) + (s[6] + s[7]));
-  }
-
   mutable cholmod_common common_{};
   cholmod_factor* factor_ = nullptr;
-  std::vector<float> single_; ///< L's values after store_single_precision
-  mutable std::vector<double> work_, below_;
   double analysis_seconds_ = 0;
   int ordering_ = -1; ///< CHOLMOD's ordering method of the particles (-1: CHOLMOD's own of K)
 };

@@ -32,11 +32,6 @@ public:
   /// Seconds the ordering and symbolic analysis took, where they run apart from the numeric
   /// factorisation (CHOLMOD); 0 otherwise.
   virtual double analysis_seconds() const { return 0.0; }
-  /// Keep the factor's values in single precision only, the solves still summing in double: for
-  /// a factor that only preconditions conjugate gradients. Each solve streams the whole factor
-  /// from memory, so this halves its time and the factor's bytes. A no-op where the
-  /// factorisation does not offer it (UMFPACK, Eigen's own).
-  virtual void store_single_precision() {}
 };
 
 /// Factor K (square, compressed, column-major). `symmetric`: K = Kᵀ (to round-off; only its lower

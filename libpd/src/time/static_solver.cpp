@@ -283,9 +283,6 @@ private:
     std::transform(d.free_dofs.begin(), d.free_dofs.end(), particle.begin(),
                    [](std::size_t g) { return g / 3; });
     f.factor = factorise(K, f.symmetric, particle);
-    if (!f.exact) {
-      f.factor->store_single_precision(); // P only preconditions conjugate gradients
-    }
     const auto t2 = clock::now();
     const auto s = [](auto a, auto b) { return std::chrono::duration<double>(b - a).count(); };
     f.check_seconds = s(t0, t_check);
