@@ -95,6 +95,49 @@ void cut_to_ellipse(const EllipticDiskSpec& s, BodySpec& body) {
   body.points = std::move(cloud);
 }
 
+/// The path band: the particles inside it replaced by a lattice of `spacing` (columns and rows
+/// rounded to fill the band exactly; an even number of rows, so that none lies on the crack's
+/// line y = 0), each with its cell's area as volume, and every size again by eq. 115. Outside the
+/// band the graded particles keep their zones' volumes, so the cells cut by the band's edge are
+/// counted once on either side (EllipticDisk.PathBandTilesTheDisk measures what that costs).
+void fill_path_band(const EllipticDiskSpec& s, double thickness, BodySpec& body) {
+  const PathBand& band = s.path_band;
+  if (!(band.spacing > 0 && band.half_length > 0 && band.half_width > 0)) {
+    throw std::invalid_argument("elliptic disk: a path band needs a spacing, a half length and a "
+                                "half width > 0");
+  }
+  if (s.particles != DiskParticles::graded) {
+    throw std::invalid_argument("elliptic disk: a path band refines the graded set only");
+  }
+  const auto in_band = [&](const Vec3& p) {
+    return std::abs(p[0]) <= band.half_length && std::abs(p[1]) <= band.half_width;
+  };
+  auto cloud = std::make_shared<PointCloud>();
+  for (std::size_t i = 0; i < body.points->count(); ++i) {
+    if (!in_band(body.points->position[i])) {
+      cloud->position.push_back(body.points->position[i]);
+      cloud->volume.push_back(body.points->volume[i]);
+    }
+  }
+  const long columns = std::max(1L, std::lround(2 * band.half_length / band.spacing));
+  const long rows = 2 * std::max(1L, std::lround(band.half_width / band.spacing));
+  const double dx = 2 * band.half_length / static_cast<double>(columns);
+  const double dy = 2 * band.half_width / static_cast<double>(rows);
+  for (long i = 0; i < columns; ++i) {
+    for (long j = 0; j < rows; ++j) {
+      const Vec3 p{-band.half_length + (static_cast<double>(i) + 0.5) * dx,
+                   -band.half_width + (static_cast<double>(j) + 0.5) * dy, 0.0};
+      if (s.held(p)) {
+        throw std::invalid_argument("elliptic disk: the path band reaches into the held zone");
+      }
+      cloud->position.push_back(p);
+      cloud->volume.push_back(dx * dy * thickness);
+    }
+  }
+  cloud->size = sizes_from_neighbours(cloud->position, 2, s.table.size_neighbours);
+  body.points = std::move(cloud);
+}
+
 /// Every free particle's horizon α h inside the disk (32 points of its circle tested), so that
 /// the held zone completes each free particle's neighbourhood.
 void check_boundary_zone(const EllipticDiskSpec& s, const PointCloud& cloud) {
@@ -142,6 +185,9 @@ Scene elliptic_disk_scene(const EllipticDiskSpec& spec) {
   BodySpec& body = scene.model.bodies.front();
   if (spec.particles == DiskParticles::uniform) {
     cut_to_ellipse(spec, body);
+  }
+  if (spec.path_band.spacing != 0) {
+    fill_path_band(spec, scene.model.dimension.thickness, body);
   }
   check_boundary_zone(spec, *body.points);
   // The held zone as a support: one point box per particle in it (a region holds boxes and

@@ -80,6 +80,9 @@ struct Disk {
   int zones_xi = 16;  ///< along ξ ∈ (0, ξ_max]
   int zones_eta = 16; ///< around, η ∈ [0, 2π) (even)
   int pattern = 3;
+  /// The crack's path at one spacing (elliptic_disk.hpp), in metres, so the same for a shorter
+  /// crack; none on the CI disk.
+  PathBand band;
   /// The same outer boundary and zone sizes around a crack of length 2c·factor (factor < 1).
   Disk shorter_crack(double factor) const {
     Disk d = *this;
@@ -100,6 +103,7 @@ struct Disk {
     s.xi_max = xi_max;
     s.remote_stress = s.table.yield_stress;
     s.boundary_rings = rings;
+    s.path_band = band;
     s.plasticity = true;
     s.elongation_limit = true;
     return s;
@@ -169,11 +173,12 @@ double plastic_reach(const Model& m, double c) {
 
 struct Failure {
   double delta_over_c = 0;
-  double failure_stress = 0; ///< peak σ_b [Pa]
-  double failure_level = 0;  ///< S/σ_y at the peak
-  double reach_at_peak = 0;  ///< plastic_reach at the peak
-  double elastic_factor = 0; ///< σ_b/S after the first increment (nearly elastic)
-  bool failed = false;       ///< σ_b fell `failure_drop` below its peak
+  double failure_stress = 0;    ///< peak σ_b [Pa]
+  double failure_level = 0;     ///< S/σ_y at the peak
+  double reach_at_peak = 0;     ///< plastic_reach at the peak
+  double elastic_factor = 0;    ///< σ_b/S after the first increment (nearly elastic)
+  double first_break_level = 0; ///< S/σ_y of the first increment with a broken arm
+  bool failed = false;          ///< σ_b fell `failure_drop` below its peak
   Json json;
 };
 
@@ -278,6 +283,9 @@ Failure run_to_failure(const DiskModel& dm, double delta_over_c, const Stepping&
                          }
                          f.failed = last_stress < (1.0 - failure_drop) * f.failure_stress;
                          const std::size_t broken = quasi_static::broken_bonds(sim.model());
+                         if (broken > 0 && f.first_break_level == 0) {
+                           f.first_break_level = inc.fraction;
+                         }
                          if (f.failed && !dir.empty()) {
                            write_vtu(dir / "griffith-last.vtu", sim);
                          }
@@ -309,6 +317,7 @@ Failure run_to_failure(const DiskModel& dm, double delta_over_c, const Stepping&
   j["failure_stress"] = f.failure_stress;
   j["failure_over_yield"] = f.failure_stress / t.yield_stress;
   j["failure_level"] = f.failure_level;
+  j["first_break_level"] = f.first_break_level;
   j["plastic_reach_over_c_at_peak"] = f.reach_at_peak;
   j["elastic_boundary_over_remote"] = f.elastic_factor;
   j["boundary_zone_distance_over_c"] = std::cosh(dm.zone_edge) - 1.0;
@@ -332,6 +341,7 @@ struct Variant {
   /// The c^(−1/2) ratio is a gate (else reported): not on a disk so coarse that the ratio moves
   /// by more than the gate between it and the next resolution (GRIFFITH.md).
   bool scaling_gated = true;
+  bool fit_gated = true;       ///< R² gated (a sensitivity variant runs one δ_e, no line)
   bool half_delta_pair = true; ///< also the pair at half the smallest δ_e (reported)
 };
 
@@ -399,6 +409,11 @@ Json run_variant(const Context& ctx, const Variant& v) {
   res["paper_particles"] = EllipticDiskTable1{}.zones_xi * EllipticDiskTable1{}.zones_eta *
                            EllipticDiskTable1{}.pattern * EllipticDiskTable1{}.pattern;
   res["load_step_over_yield"] = v.stepping.step;
+  if (v.disk.band.spacing > 0) {
+    res["path_band_spacing_over_c"] = v.disk.band.spacing / v.disk.c;
+    res["path_band_half_length_over_c"] = v.disk.band.half_length / v.disk.c;
+    res["path_band_half_width_over_c"] = v.disk.band.half_width / v.disk.c;
+  }
   const std::filesystem::path dir = ctx.output_dir / v.name;
 
   std::vector<double> x, y;
@@ -455,7 +470,8 @@ Json run_variant(const Context& ctx, const Variant& v) {
                           "sweep's smallest δ_e{}",
                           100 * failure_drop, r_squared_gate, 100 * scaling_gate,
                           v.scaling_gated ? "" : " (reported, not gated on this coarse disk)"),
-              all_failed && fit_passed && (scaling_passed || !v.scaling_gated), start);
+              all_failed && (fit_passed || !v.fit_gated) && (scaling_passed || !v.scaling_gated),
+              start);
   return out;
 }
 
@@ -469,6 +485,20 @@ Variant finer_variant(std::string name, std::array<int, 3> zones, std::vector<in
   v.disk.pattern = zones[2];
   v.stepping.step = 0.005;
   v.divisors = std::move(divisors);
+  return v;
+}
+
+/// The disk of the gated c^(−1/2) comparison (GRIFFITH.md, "Design"): zones of Δξ = 0.1 and
+/// Δη = 2π/20 with 4 × 4 particles out to `xi_max` (≥ 2.7: the boundary zone several plastic
+/// zones away from either crack), and the crack's path |x| ≤ 2c, |y| ≤ c/2 at the one spacing
+/// c/`per_c` for both crack lengths, so that neither the disk's edge nor its grading sets where
+/// the growing crack arrests.
+Variant path_variant(std::string name, double xi_max, double per_c, std::vector<int> divisors) {
+  Variant v = finer_variant(std::move(name), {static_cast<int>(std::lround(10 * xi_max)), 20, 4},
+                            std::move(divisors));
+  const double c = v.disk.c;
+  v.disk.xi_max = xi_max;
+  v.disk.band = {c / per_c, 2 * c, c / 2};
   return v;
 }
 
@@ -489,7 +519,23 @@ Json run_griffith_full(const Context& ctx) {
   for (int k = 750; k <= 3250; k += 250) {
     divisors.push_back(k);
   }
-  return run_variant(ctx, finer_variant("griffith-full", {20, 20, 4}, divisors));
+  return run_variant(ctx, path_variant("griffith-full", 2.7, 32, divisors));
+}
+
+Json run_griffith_boundary(const Context& ctx) {
+  // griffith-full's c^(−1/2) pair on a larger disk: does the failure stress still move with it?
+  Variant v = path_variant("griffith-boundary", 3.2, 32, {3250});
+  v.fit_gated = false;
+  v.half_delta_pair = false;
+  return run_variant(ctx, v);
+}
+
+Json run_griffith_resolution(const Context& ctx) {
+  // griffith-full's c^(−1/2) pair with the crack's path at 1.5 times the density.
+  Variant v = path_variant("griffith-resolution", 2.7, 48, {3250});
+  v.fit_gated = false;
+  v.half_delta_pair = false;
+  return run_variant(ctx, v);
 }
 
 Json run_griffith_table1(const Context& ctx) {
