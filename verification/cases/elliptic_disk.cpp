@@ -59,7 +59,9 @@ std::string scene_text(const EllipticDiskSpec& s) {
   }
   const double c = t.focal_half_distance;
   // The lattice spacing only scales the tolerance of region tests (10⁻⁶ λ): c/100 keeps it far
-  // below the closest particles of the finest set.
+  // below the closest particles of the finest set. The scene reader also estimates the memory
+  // of a lattice at that spacing over the disk's box, so a disk whose semi-major axis a is over
+  // 4c (a short crack in a large disk) takes a/400, still far below its closest particles.
   return fmt::format(
       "title: \"Elliptical disk with a crack between the focal points (Olsson et al. 2021)\"\n"
       "dimension: 2\n"
@@ -75,8 +77,8 @@ std::string scene_text(const EllipticDiskSpec& s) {
       "  fibre_kernel_alpha: {:.17g}\n  fibre_size_neighbours: {}\n"
       "solver:\n  integrator: adr\n  dt: 1\n  end_time: 2000000\n"
       "  steady: {{kinetic_tolerance: 1e-12, force_tolerance: 1e-7, check_every: 100}}\n",
-      c / 100, t.youngs_modulus, t.poisson_ratio, t.density, limits, body_text(s), -c, c, effects,
-      t.kernel_alpha, t.size_neighbours);
+      std::max(c / 100, semi_axes(s).first / 400), t.youngs_modulus, t.poisson_ratio, t.density,
+      limits, body_text(s), -c, c, effects, t.kernel_alpha, t.size_neighbours);
 }
 
 /// The uniform set: the box's particles inside the ellipse, their sizes again by eq. 115 among
