@@ -42,8 +42,9 @@
 //   `griffith-resolution` (c/48) measure what the disk and the spacing still move.
 // - σ_b and S: eq. 116 is the exact elastic field of either disk, so linear elastic fracture
 //   mechanics gives exactly √2 in S, while σ_b = κ S in the elastic range with κ set by the disk's
-//   size over its crack (0.893 for ξ_max = 2, 0.927 for its c/2 disk; 0.903 and 0.909 at 2.7). The issue reads σ_f from
-//   the reactions, so σ_b is gated and the ratio in S (`remote_ratio`) is reported beside it.
+//   size over its crack (0.893 for ξ_max = 2, 0.927 for its c/2 disk; 0.903 and 0.909 at 2.7). The
+//   issue reads σ_f from the reactions, so σ_b is gated and the ratio in S (`remote_ratio`) is
+//   reported beside it.
 //
 // Resolution and cost (the issue's "decide honestly"): the paper uses Table 1 (20,000 particles,
 // ~226,000 arms) and a fine load step. `griffith` (CI) runs 16 × 16 zones of 3 × 3 (2,304
