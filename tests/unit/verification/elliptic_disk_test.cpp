@@ -106,6 +106,17 @@ TEST(EllipticDisk, UniformRowsStayOffTheCrack) {
   }
 }
 
+TEST(EllipticDisk, ALargeDiskIsNotRefusedByTheMemoryEstimate) {
+  // A short crack in a large disk: a = 24.7 c. The scene reader estimates the memory of a
+  // lattice at the scene's spacing over the disk's box; at c/100 that is 2.2 × 10⁷ particles
+  // (50 GiB, refused), at a/400 6.4 × 10⁵.
+  EllipticDiskSpec s = small_disk();
+  s.xi_max = 3.9;
+  s.boundary_rings = 1;
+  const Scene scene = elliptic_disk_scene(s);
+  EXPECT_EQ(scene.model.bodies.front().points->count(), 6U * 16U * 16U);
+}
+
 EllipticDiskSpec banded_disk() {
   EllipticDiskSpec s = small_disk();
   const double c = s.table.focal_half_distance;
@@ -116,7 +127,8 @@ EllipticDiskSpec banded_disk() {
 TEST(EllipticDisk, PathBandIsOneLatticeAlongTheCrack) {
   const EllipticDiskSpec s = banded_disk();
   const PathBand& band = s.path_band;
-  const PointCloud& cloud = *elliptic_disk_scene(s).model.bodies.front().points;
+  const Scene scene = elliptic_disk_scene(s); // owns the cloud
+  const PointCloud& cloud = *scene.model.bodies.front().points;
   std::size_t inside = 0;
   double smallest = 1e300, largest = 0;
   for (std::size_t i = 0; i < cloud.count(); ++i) {
@@ -147,7 +159,8 @@ TEST(EllipticDisk, PathBandTilesTheDisk) {
   // The graded particles outside the band keep their zones' volumes; the volumes still add up
   // to the ellipse's area π a b within what the cells cut by the band's edge cost.
   const EllipticDiskSpec s = banded_disk();
-  const PointCloud& cloud = *elliptic_disk_scene(s).model.bodies.front().points;
+  const Scene scene = elliptic_disk_scene(s); // owns the cloud
+  const PointCloud& cloud = *scene.model.bodies.front().points;
   double area = 0;
   for (const double v : cloud.volume) {
     area += v;
