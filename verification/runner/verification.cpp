@@ -176,7 +176,7 @@ const std::vector<Case>& all_cases() {
       {"griffith-boundary", "griffith-full's c^(-1/2) pair on a larger disk (xi_max 3.2, slow)",
        run_griffith_boundary},
       {"griffith-resolution",
-       "griffith-full's c^(-1/2) pair with the crack's path at spacing c/48 (slow)",
+       "griffith-full's c^(-1/2) pair with the crack's path at spacing c/64 (slow)",
        run_griffith_resolution},
       {"griffith-table1",
        "griffith at Table 1's particle density (25,000 particles), three elongation limits "
