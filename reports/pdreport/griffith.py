@@ -11,6 +11,9 @@ from .markup import failed_box, num_td, table
 from .page import Page, plt
 
 CASES = ("griffith-full", "griffith")
+# griffith-full's c^(−1/2) pair on a larger disk and on a finer crack path: what still moves.
+SENSITIVITY = (("griffith-full", "as run"), ("griffith-boundary", "larger disk"),
+               ("griffith-resolution", "finer crack path"))
 
 
 def section(page: Page) -> str:
@@ -35,6 +38,7 @@ def section(page: Page) -> str:
                  f"{'<span class=pass>passed</span>' if d.get('passed') else '<span class=fail>FAILED</span>'}"
                  f" — {esc(d.get('gate'))}.</p>")
     parts.append(summary_table(d))
+    parts.append(sensitivity_table(page))
     parts.append('<div class="figs">' + scaling_figure(page, case, d) + history_figure(page, case, d) +
                  "</div>")
     return "".join(parts) + "</section>"
@@ -56,10 +60,41 @@ def summary_table(d: dict) -> str:
             ["the same in the remote stress S (reported)", num_td(pct(sc.get("remote_ratio_error")))],
             [f"σ_f(c/2) / σ_f(c) at δ_e = c/{_divisor(sm)}, half the smallest (reported)",
              num_td(f"{fnum(sm.get('ratio'))} ({pct(sm.get('error'))})")],
+            ["disk ξ_max; the crack's path at spacing (over c)",
+             num_td(f"{fnum(res.get('xi_max'))}; {fnum(res.get('path_band_spacing_over_c'))}")],
             ["particles (paper: Table 1)", num_td(f"{fnum(particles)} ({fnum(res.get('paper_particles'))})")],
             ["load step ΔS/σ_y", num_td(fnum(res.get("load_step_over_yield")))],
             ["wall time", num_td(f"{fnum(d.get('wall_seconds'))} s")]]
     return table(["", ""], rows, 'id="griffith-table"')
+
+
+def sensitivity_table(page: Page) -> str:
+    """The gated pair of griffith-full beside the same pair on a larger disk and a finer path."""
+    rows = []
+    for case, what in SENSITIVITY:
+        rec = page.rec.get(f"verify:{case}")
+        if not R.ok(rec):
+            continue
+        d = rec["result"]
+        res = d.get("resolution") or {}
+        sc = d.get("crack_length_scaling") or {}
+        rows.append([f"{esc(case)} ({what})", num_td(fnum(res.get("xi_max"))),
+                     num_td(fnum(res.get("path_band_spacing_over_c"))),
+                     num_td(fnum((sc.get("long_run") or _run_at(d, sc)).get("failure_over_yield"))),
+                     num_td(fnum((sc.get("short_run") or {}).get("failure_over_yield"))),
+                     num_td(f"{fnum(sc.get('ratio'))} ({pct(sc.get('error'))})")])
+    if len(rows) < 2:
+        return ""
+    return table(["run", "ξ_max", "path spacing / c", "σ_f(c)/σ_y", "σ_f(c/2)/σ_y", "ratio (vs √2)"],
+                 rows, 'id="griffith-sensitivity"')
+
+
+def _run_at(d: dict, pair: dict) -> dict:
+    """The sweep's run at the pair's δ_e (the pair reuses it rather than storing it again)."""
+    for r in d.get("sweep") or []:
+        if r.get("delta_over_c") == pair.get("long_delta_over_c"):
+            return r
+    return {}
 
 
 def _divisor(pair: dict) -> str:

@@ -59,7 +59,9 @@ std::string scene_text(const EllipticDiskSpec& s) {
   }
   const double c = t.focal_half_distance;
   // The lattice spacing only scales the tolerance of region tests (10⁻⁶ λ): c/100 keeps it far
-  // below the closest particles of the finest set.
+  // below the closest particles of the finest set. The scene reader also estimates the memory
+  // of a lattice at that spacing over the disk's box, so a disk whose semi-major axis a is over
+  // 4c (a short crack in a large disk) takes a/400, still far below its closest particles.
   return fmt::format(
       "title: \"Elliptical disk with a crack between the focal points (Olsson et al. 2021)\"\n"
       "dimension: 2\n"
@@ -75,8 +77,8 @@ std::string scene_text(const EllipticDiskSpec& s) {
       "  fibre_kernel_alpha: {:.17g}\n  fibre_size_neighbours: {}\n"
       "solver:\n  integrator: adr\n  dt: 1\n  end_time: 2000000\n"
       "  steady: {{kinetic_tolerance: 1e-12, force_tolerance: 1e-7, check_every: 100}}\n",
-      c / 100, t.youngs_modulus, t.poisson_ratio, t.density, limits, body_text(s), -c, c, effects,
-      t.kernel_alpha, t.size_neighbours);
+      std::max(c / 100, semi_axes(s).first / 400), t.youngs_modulus, t.poisson_ratio, t.density,
+      limits, body_text(s), -c, c, effects, t.kernel_alpha, t.size_neighbours);
 }
 
 /// The uniform set: the box's particles inside the ellipse, their sizes again by eq. 115 among
@@ -89,6 +91,49 @@ void cut_to_ellipse(const EllipticDiskSpec& s, BodySpec& body) {
     if ((p[0] / a) * (p[0] / a) + (p[1] / b) * (p[1] / b) <= 1.0) {
       cloud->position.push_back(p);
       cloud->volume.push_back(body.points->volume[i]);
+    }
+  }
+  cloud->size = sizes_from_neighbours(cloud->position, 2, s.table.size_neighbours);
+  body.points = std::move(cloud);
+}
+
+/// The path band: the particles inside it replaced by a lattice of `spacing` (columns and rows
+/// rounded to fill the band exactly; an even number of rows, so that none lies on the crack's
+/// line y = 0), each with its cell's area as volume, and every size again by eq. 115. Outside the
+/// band the graded particles keep their zones' volumes, so the cells cut by the band's edge are
+/// counted once on either side (EllipticDisk.PathBandTilesTheDisk measures what that costs).
+void fill_path_band(const EllipticDiskSpec& s, double thickness, BodySpec& body) {
+  const PathBand& band = s.path_band;
+  if (!(band.spacing > 0 && band.half_length > 0 && band.half_width > 0)) {
+    throw std::invalid_argument("elliptic disk: a path band needs a spacing, a half length and a "
+                                "half width > 0");
+  }
+  if (s.particles != DiskParticles::graded) {
+    throw std::invalid_argument("elliptic disk: a path band refines the graded set only");
+  }
+  const auto in_band = [&](const Vec3& p) {
+    return std::abs(p[0]) <= band.half_length && std::abs(p[1]) <= band.half_width;
+  };
+  auto cloud = std::make_shared<PointCloud>();
+  for (std::size_t i = 0; i < body.points->count(); ++i) {
+    if (!in_band(body.points->position[i])) {
+      cloud->position.push_back(body.points->position[i]);
+      cloud->volume.push_back(body.points->volume[i]);
+    }
+  }
+  const long columns = std::max(1L, std::lround(2 * band.half_length / band.spacing));
+  const long rows = 2 * std::max(1L, std::lround(band.half_width / band.spacing));
+  const double dx = 2 * band.half_length / static_cast<double>(columns);
+  const double dy = 2 * band.half_width / static_cast<double>(rows);
+  for (long i = 0; i < columns; ++i) {
+    for (long j = 0; j < rows; ++j) {
+      const Vec3 p{-band.half_length + (static_cast<double>(i) + 0.5) * dx,
+                   -band.half_width + (static_cast<double>(j) + 0.5) * dy, 0.0};
+      if (s.held(p)) {
+        throw std::invalid_argument("elliptic disk: the path band reaches into the held zone");
+      }
+      cloud->position.push_back(p);
+      cloud->volume.push_back(dx * dy * thickness);
     }
   }
   cloud->size = sizes_from_neighbours(cloud->position, 2, s.table.size_neighbours);
@@ -142,6 +187,9 @@ Scene elliptic_disk_scene(const EllipticDiskSpec& spec) {
   BodySpec& body = scene.model.bodies.front();
   if (spec.particles == DiskParticles::uniform) {
     cut_to_ellipse(spec, body);
+  }
+  if (spec.path_band.spacing != 0) {
+    fill_path_band(spec, scene.model.dimension.thickness, body);
   }
   check_boundary_zone(spec, *body.points);
   // The held zone as a support: one point box per particle in it (a region holds boxes and

@@ -33,6 +33,18 @@ namespace pd::verification {
 /// that measures what the grading saves).
 enum class DiskParticles { graded, uniform };
 
+/// A band along the crack's line, |x| ≤ half_length and |y| ≤ half_width, filled with a regular
+/// lattice of one spacing in place of the particles there. The paper's grading (eq. 114) refines
+/// the initial tips only, so a crack that grows before the peak load runs into ever coarser
+/// zones and the peak is set by where the grading stops it (GRIFFITH.md); with the band, the
+/// crack's whole path, its initial tips and the process zone ahead of them see one particle size
+/// in metres, the same for every crack length.
+struct PathBand {
+  double spacing = 0; ///< lattice spacing [m]; 0: no band
+  double half_length = 0;
+  double half_width = 0;
+};
+
 struct EllipticDiskSpec {
   EllipticDiskTable1 table; ///< c, zones, kernel, material (Table 1)
   /// Density: particles per zone side (graded). Table 1: 5 (20,000 particles); Fig. 10: up to 7.
@@ -50,6 +62,7 @@ struct EllipticDiskSpec {
   double uniform_spacing = 0;          ///< uniform: particle spacing [m]
   std::uint64_t seed = 1;              ///< Monte Carlo noise of the particle positions (Fig. 8)
   int sweeps = GradedSetSpec{}.sweeps; ///< Monte Carlo sweeps (0: the regular zone pattern)
+  PathBand path_band;                  ///< graded particles only (none by default)
 
   int zones_xi() const { return table.zones_xi / 2; }   ///< zones along ξ ∈ (0, ξ_max]
   int zones_eta() const { return 2 * table.zones_eta; } ///< zones around, η ∈ [0, 2π)
@@ -63,7 +76,8 @@ struct EllipticDiskSpec {
 
 /// The disk's scene (support `boundary` holds the zone, crack `focal`). Throws
 /// std::invalid_argument if a free particle's horizon reaches outside the disk: the boundary
-/// zone is then thinner than a horizon at that density.
+/// zone is then thinner than a horizon at that density, or if the path band reaches into the held
+/// zone.
 Scene elliptic_disk_scene(const EllipticDiskSpec& spec);
 
 } // namespace pd::verification

@@ -50,6 +50,8 @@ Json run_elliptic_disk_saving(const Context& ctx);
 Json run_elliptic_disk_regular(const Context& ctx);
 Json run_griffith(const Context& ctx);
 Json run_griffith_full(const Context& ctx);
+Json run_griffith_boundary(const Context& ctx);
+Json run_griffith_resolution(const Context& ctx);
 Json run_griffith_table1(const Context& ctx);
 
 } // namespace pd::verification

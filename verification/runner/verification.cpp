@@ -169,8 +169,15 @@ const std::vector<Case>& all_cases() {
        "virtual fibres: failure stress of a cracked elliptical disk vs the elongation limit and "
        "the crack length (Griffith scaling, Olsson et al. Fig. 14), coarse disk",
        run_griffith},
-      {"griffith-full", "griffith on a finer disk over 11 elongation limits (slow)",
+      {"griffith-full",
+       "griffith on a larger disk (xi_max 2.7) with the crack's path at one spacing (c/32), "
+       "11 elongation limits (slow)",
        run_griffith_full},
+      {"griffith-boundary", "griffith-full's c^(-1/2) pair on a larger disk (xi_max 3.2, slow)",
+       run_griffith_boundary},
+      {"griffith-resolution",
+       "griffith-full's c^(-1/2) pair with the crack's path at spacing c/64 (slow)",
+       run_griffith_resolution},
       {"griffith-table1",
        "griffith at Table 1's particle density (25,000 particles), three elongation limits "
        "(slow)",

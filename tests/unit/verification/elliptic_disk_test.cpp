@@ -106,5 +106,79 @@ TEST(EllipticDisk, UniformRowsStayOffTheCrack) {
   }
 }
 
+TEST(EllipticDisk, ALargeDiskIsNotRefusedByTheMemoryEstimate) {
+  // A short crack in a large disk: a = 24.7 c. The scene reader estimates the memory of a
+  // lattice at the scene's spacing over the disk's box; at c/100 that is 2.2 × 10⁷ particles
+  // (50 GiB, refused), at a/400 6.4 × 10⁵.
+  EllipticDiskSpec s = small_disk();
+  s.xi_max = 3.9;
+  s.boundary_rings = 1;
+  const Scene scene = elliptic_disk_scene(s);
+  EXPECT_EQ(scene.model.bodies.front().points->count(), 6U * 16U * 16U);
+}
+
+EllipticDiskSpec banded_disk() {
+  EllipticDiskSpec s = small_disk();
+  const double c = s.table.focal_half_distance;
+  s.path_band = {c / 10, 1.5 * c, 0.3 * c};
+  return s;
+}
+
+TEST(EllipticDisk, PathBandIsOneLatticeAlongTheCrack) {
+  const EllipticDiskSpec s = banded_disk();
+  const PathBand& band = s.path_band;
+  const Scene scene = elliptic_disk_scene(s); // owns the cloud
+  const PointCloud& cloud = *scene.model.bodies.front().points;
+  std::size_t inside = 0;
+  double smallest = 1e300, largest = 0;
+  for (std::size_t i = 0; i < cloud.count(); ++i) {
+    const Vec3& p = cloud.position[i];
+    if (std::abs(p[0]) > band.half_length || std::abs(p[1]) > band.half_width) {
+      continue;
+    }
+    ++inside;
+    // On the lattice: cell centres, no row on the crack's line.
+    const double column = (p[0] + band.half_length) / band.spacing - 0.5;
+    const double row = (p[1] + band.half_width) / band.spacing - 0.5;
+    EXPECT_NEAR(column, std::round(column), 1e-9);
+    EXPECT_NEAR(row, std::round(row), 1e-9);
+    EXPECT_GT(std::abs(p[1]), 0.4 * band.spacing);
+    EXPECT_NEAR(cloud.volume[i], band.spacing * band.spacing, 1e-12 * band.spacing);
+    // Away from the band's edge every particle has the same neighbours, so the same size.
+    if (std::abs(p[0]) < band.half_length - 2 * band.spacing &&
+        std::abs(p[1]) < band.half_width - 2 * band.spacing) {
+      smallest = std::min(smallest, cloud.size[i]);
+      largest = std::max(largest, cloud.size[i]);
+    }
+  }
+  EXPECT_EQ(inside, 30U * 6U);
+  EXPECT_NEAR(largest / smallest, 1.0, 1e-9);
+}
+
+TEST(EllipticDisk, PathBandTilesTheDisk) {
+  // The graded particles outside the band keep their zones' volumes; the volumes still add up
+  // to the ellipse's area π a b within what the cells cut by the band's edge cost.
+  const EllipticDiskSpec s = banded_disk();
+  const Scene scene = elliptic_disk_scene(s); // owns the cloud
+  const PointCloud& cloud = *scene.model.bodies.front().points;
+  double area = 0;
+  for (const double v : cloud.volume) {
+    area += v;
+  }
+  const double c = s.table.focal_half_distance;
+  EXPECT_NEAR(area / (std::numbers::pi * c * c * std::cosh(s.xi_max) * std::sinh(s.xi_max)), 1.0,
+              0.01);
+}
+
+TEST(EllipticDisk, RefusesAPathBandInTheHeldZone) {
+  EllipticDiskSpec s = banded_disk();
+  s.path_band.half_length = s.table.focal_half_distance * std::cosh(s.xi_max);
+  EXPECT_THROW(elliptic_disk_scene(s), std::invalid_argument);
+  s = banded_disk();
+  s.particles = DiskParticles::uniform;
+  s.uniform_spacing = s.table.focal_half_distance / 6;
+  EXPECT_THROW(elliptic_disk_scene(s), std::invalid_argument);
+}
+
 } // namespace
 } // namespace pd::verification
