@@ -88,12 +88,13 @@ Eigen::SparseMatrix<double> column_major(StaticSystem system, bool symmetric) {
 struct CgResult {
   Eigen::VectorXd x;
   std::size_t iterations = 0;
+  bool converged = false;
 };
 template <typename Apply, typename Precondition>
 CgResult preconditioned_cg(const Apply& apply, const Precondition& precondition,
                            const Eigen::VectorXd& b, double relative_tolerance,
                            std::size_t max_iterations) {
-  CgResult out{Eigen::VectorXd::Zero(b.size()), 0};
+  CgResult out{Eigen::VectorXd::Zero(b.size()), 0, b.norm() <= relative_tolerance * b.norm()};
   Eigen::VectorXd res = b, z = precondition(res), p = z;
   double rz = res.dot(z);
   const double stop = relative_tolerance * b.norm();
@@ -108,7 +109,8 @@ CgResult preconditioned_cg(const Apply& apply, const Precondition& precondition,
     out.x += alpha * p;
     res -= alpha * q;
     if (res.norm() <= stop) {
-      break; // converged: the next direction (one more preconditioner solve) is not needed
+      out.converged = true; // the next direction (one more preconditioner solve) is not needed
+      break;
     }
     z = precondition(res);
     const double rz_next = res.dot(z);
@@ -292,10 +294,11 @@ private:
   }
 
   /// The linear solution and Newton (attempt) with P's factor where factor_system chooses it;
-  /// where that does not converge, once more from the same start with K's own factor. P is only
-  /// close to K in energy where the refit changes little: with `volume_correction: none` on the
-  /// plate (every bond to δ kept, ghosts a whole horizon deep) Newton preconditioned by P stalled
-  /// at 3.4e-4 of the load after 50 steps, where K's factor converges in 3.
+  /// where CG with it needs more than max_linear_iterations_with_p or Newton more than
+  /// max_newton_iterations_with_p steps, once more from the same start with K's own factor. P is
+  /// only close to K in energy where the refit changes little: with `volume_correction: none` on
+  /// the plate (every bond to δ kept, ghosts a whole horizon deep) Newton preconditioned by P
+  /// stalled at 3.4e-4 of the load after 50 steps, where K's factor converges in 3.
   void solve(State& st) {
     const std::vector<double> start = st.position;
     fell_back_ = false;
@@ -357,7 +360,20 @@ private:
     }
     const Eigen::VectorXd rhs = f.exact ? f.rhs : linearised_load(d);
     const auto t_linear = clock::now();
-    place(f.exact ? factor.solve(rhs) : linear_solution(f, rhs));
+    if (f.exact) {
+      place(factor.solve(rhs));
+    } else {
+      const CgResult linear = linear_solution(f, rhs);
+      place(linear.x);
+      if (!linear.converged) {
+        // P is not close to K: Newton with it would be slower still (solve falls back to K).
+        linear_seconds_ = std::chrono::duration<double>(clock::now() - t_linear).count();
+        newton_converged_ = false;
+        record(f, 0, std::numeric_limits<double>::quiet_NaN(), 0,
+               std::chrono::duration<double>(clock::now() - t2).count());
+        return false;
+      }
+    }
     linear_seconds_ = std::chrono::duration<double>(clock::now() - t_linear).count();
     std::vector<std::uint8_t> held(d.kind.size());
     std::transform(d.kind.begin(), d.kind.end(), held.begin(),
@@ -496,7 +512,7 @@ private:
 
   /// K⁻¹ f by conjugate gradients on K, applied matrix-free (apply_constrained_operator: the
   /// bonds once, the extrapolation and its transpose), preconditioned by the factor of P.
-  Eigen::VectorXd linear_solution(const Factored& f, const Eigen::VectorXd& rhs) {
+  CgResult linear_solution(const Factored& f, const Eigen::VectorXd& rhs) {
     const DofMap& d = f.dofs;
     std::vector<double> u(d.kind.size()), ku(d.kind.size());
     const auto apply = [&](const Eigen::VectorXd& x) {
@@ -513,10 +529,10 @@ private:
       return out;
     };
     const auto precondition = [&](const Eigen::VectorXd& v) { return f.factor->solve(v); };
-    const CgResult cg =
-        preconditioned_cg(apply, precondition, rhs, linear_tolerance, max_linear_iterations);
+    CgResult cg =
+        preconditioned_cg(apply, precondition, rhs, linear_tolerance, max_linear_iterations_with_p);
     linear_iterations_ = cg.iterations;
-    return cg.x;
+    return cg;
   }
 
   /// The Newton step J δ = r, J the tangent of the force kernel at y (finite differences of the
@@ -574,7 +590,13 @@ private:
   /// more to Newton's CG, whose iterations cost more (two kernel evaluations) and converged more
   /// slowly with P (30.7 s against 23.7 s at load 17–21).
   static constexpr double linear_tolerance = 1e-4;
-  static constexpr std::size_t max_linear_iterations = 500;
+  /// Where CG preconditioned by P needs more iterations than this, P is too far from K, and K's
+  /// own factor (solve's fall-back) is cheaper than going on, although it is larger. Measured on
+  /// the plate's sweep (1 thread, load 4–6; P's iterations to 1e-4 / solve with P / with K): the
+  /// scene 26 / 4.5 s / 8.9 s, surface_correction none 13 / 3.1 s, volume_correction none (every
+  /// bond to δ, ghosts a horizon deep: P's factor 92 M entries, K's 126 M) 149 / 95 s / 13.5 s,
+  /// macek-silling + linear (no ghosts, the quadratic clamps refitted) 62 / 32 s / 4.6 s.
+  static constexpr std::size_t max_linear_iterations_with_p = 40;
   static constexpr std::size_t max_newton_iterations_with_p = 12;
   /// The residual (relative to the load) a solve must reach when the settings give none, or
   /// round_off_margin × the round-off floor where that is higher (kernel/round_off.hpp).
