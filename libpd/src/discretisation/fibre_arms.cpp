@@ -235,8 +235,9 @@ Conditions balance_conditions(int dim, const ParticleSet& particles, const BondF
 /// C G Cᵀ is a block graph Laplacian (9 rows per particle in 2D, 25 in 3D) and is factored
 /// directly (CHOLMOD's supernodal Cholesky where libpd has it, else Eigen's LDLᵀ): the conjugate
 /// gradients with an incomplete Cholesky factor used before needed thousands of iterations: the
-/// regular disk of 7,200 particles set up in 16.5 s instead of 88 s (one thread, under load). A particle whose arms are all held leaves its rows empty; a shift of
-/// 1e-12 of the largest diagonal keeps the factor defined.
+/// regular disk of 7,200 particles set up in 16.5 s instead of 88 s (one thread, under load). A
+/// particle whose arms are all held leaves its rows empty; a shift of 1e-12 of the largest diagonal
+/// keeps the factor defined.
 void least_change(const Conditions& c, const std::vector<double>& g,
                   const std::vector<std::uint8_t>& fixed, std::vector<double>& y) {
   const auto rows = static_cast<Eigen::Index>(c.rhs.size());
