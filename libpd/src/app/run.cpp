@@ -118,15 +118,16 @@ private:
   }
 
   // The balance of a point cloud's arms (discretisation/fibre_arms.hpp) is all or nothing: where
-  // it would leave an arm without weight it is not applied, and interior particles keep the
-  // force imbalance of their irregular arrangement. Such a run must say so.
+  // its conditions cannot be met with positive weights it is not applied, and interior
+  // particles keep the force imbalance of their irregular arrangement. Such a run must say so.
   void check_fibre_balance() {
     const FibreArms& a = model_.fibre_arms;
-    if (a.balance_refused > 0) {
-      warn(fmt::format("virtual fibres: the arm balance was not applied ({} arms would have lost "
-                       "their weight): under a homogeneous strain interior particles keep forces "
-                       "of order 0.2 σ/h; a more regular particle set avoids this",
-                       a.balance_refused));
+    if (a.balance_passes > 0 && !a.balance_applied) {
+      warn(fmt::format("virtual fibres: the arm balance was not applied (relative residual {:.2g} "
+                       "after {} passes, {} arms at their floor): under a homogeneous strain "
+                       "interior particles keep forces of order 0.2 σ/h; a more regular particle "
+                       "set avoids this",
+                       a.balance_residual, a.balance_passes, a.balance_floored));
     }
   }
 

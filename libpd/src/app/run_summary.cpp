@@ -70,12 +70,13 @@ Json run_summary(const Scene& scene, const Simulation& sim, const RunOutcome& ou
   if (Json details = sim.integrator().summary(); details.is_object()) {
     j["integrator_details"] = std::move(details);
   }
-  if (model.fibre_arms.balanced > 0 || model.fibre_arms.balance_refused > 0) {
-    Json& fb = j["fibre_balance"]; // fibre_arms.hpp: point clouds' arms balanced or not
+  if (model.fibre_arms.balance_passes > 0) {
+    Json& fb = j["fibre_balance"]; // fibre_arms.hpp: point clouds' arms balanced
     fb["balanced_particles"] = model.fibre_arms.balanced;
     fb["relative_residual"] = model.fibre_arms.balance_residual;
-    fb["arms_refused"] = model.fibre_arms.balance_refused;
-    fb["applied"] = model.fibre_arms.balance_refused == 0;
+    fb["arms_at_floor"] = model.fibre_arms.balance_floored;
+    fb["passes"] = model.fibre_arms.balance_passes;
+    fb["applied"] = model.fibre_arms.balance_applied;
   }
   if (!scene.model.cracks.empty()) {
     Json& cj = j["cracks"]; // pairs of particles a crack kept from bonding

@@ -24,11 +24,12 @@
 // weights alone). Even moments cannot cancel the arms' forces on an irregular set: that is the
 // third moment of the pair weights α_ab = V_a A_ab + V_b A_ba, about 0.2 σ/h at interior particles
 // of a graded, jittered plate. So point clouds are then balanced (fibre_arms.cpp,
-// balance_odd_moments): each pair's weights are scaled and split between its ends, by the least
-// change, so that every particle with a full horizon has zero third moment (no net force under
-// any homogeneous strain: the integration constraint of meshfree methods) and every particle
-// keeps its fourth moments; 1e-7 σ/h is left (the solver's tolerance). Arm tensions stay equal
-// and opposite at both ends and derive from the energy below.
+// balance_arms): every arm weight changes, by the least relative change, so that every particle
+// with a full horizon has zero third moment (no net force under any homogeneous strain: the
+// integration constraint of meshfree methods) and the isotropic fourth moments, and every other
+// particle keeps its fourth moments; 1e-7 σ/h is left. Arms are held at 10 % of their weight at
+// least; where the conditions cannot then be met (the Monte Carlo sets of Fig. 8) nothing is
+// changed. Arm tensions stay equal and opposite at both ends and derive from the energy below.
 //
 // Particles that are extrapolated (ghosts, quadratic clamps: ghost_layers.hpp) own no energy:
 // their A is zero, so each body particle stores the bulk energy of the field it sees
@@ -52,11 +53,15 @@ struct FibreArms {
   std::vector<double> other;      ///< B_k per directed bond [1/m]
   std::vector<double> shear;      ///< G(N+2) of each particle's material [Pa]
   std::vector<double> volumetric; ///< NK − G(N+2) of each particle's material [Pa]
-  /// Point clouds: particles whose third moments were zeroed (fibre_arms), the constraints'
-  /// relative residual, and the arms that would have turned non-positive (then none changed).
+  /// Point clouds (fibre_arms.cpp, balance_arms): the interior particles whose third moments
+  /// are to be zeroed and fourth moments made isotropic, the conditions' relative residual, the
+  /// arms held at their floor (10 % of their weight before the balance), the least-change solves,
+  /// and whether the balance was applied (residual ≤ 1e-6; else no weight changed).
   std::size_t balanced = 0;
   double balance_residual = 0;
-  std::size_t balance_refused = 0;
+  std::size_t balance_floored = 0;
+  int balance_passes = 0;
+  bool balance_applied = false;
 
   bool empty() const { return own.empty(); }
 };
