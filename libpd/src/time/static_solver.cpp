@@ -379,27 +379,7 @@ private:
     std::transform(d.kind.begin(), d.kind.end(), held.begin(),
                    [](std::uint8_t kind) { return static_cast<std::uint8_t>(kind != 0); });
     const double floor_force = residual_round_off_floor(model_, y, held);
-    // The residual is measured as Simulation::force_balance measures it for dynamic relaxation:
-    // against the applied loads, or, where only displacements are prescribed, the reactions of
-    // the current state (K u_p, the linearised load, is far larger: a bar's supports push on
-    // their neighbours over λ, the bar resists over its length).
-    double applied = 0;
-    for (std::size_t g = 0; g < ext.size(); ++g) {
-      const double v = model_.particles.volume[g / 3] * ext[g];
-      applied += v * v;
-    }
-    applied = std::sqrt(applied);
-    const auto reference = [&] {
-      if (applied > 0) {
-        return applied;
-      }
-      double reactions = 0;
-      for (std::size_t g = 0; g < held.size(); ++g) {
-        const double v = held[g] ? model_.particles.volume[g / 3] * st.force[g] : 0.0;
-        reactions += v * v;
-      }
-      return std::max(std::sqrt(reactions), 1e-300);
-    };
+    const double applied = applied_load_norm();
     // Converged at the tolerance dynamic relaxation is held to, or just above the round-off floor
     // where that is higher (a light load on a stiff, fine or far-off body). Newton aims at a tenth
     // of it, so that the static answer is the converged one against which relaxation's own error
@@ -413,7 +393,7 @@ private:
     std::vector<double> before;
     for (;; ++iterations) {
       const Eigen::VectorXd r = residual_at(y);
-      const double force_reference = reference();
+      const double force_reference = applied > 0 ? applied : reactions_norm(st.force, held);
       residual = r.norm() / force_reference;
       floor = floor_force / force_reference;
       acceptable = std::max(tolerance_, round_off_margin * floor);
@@ -446,6 +426,30 @@ private:
     newton_converged_ = residual <= acceptable;
     record(f, iterations, residual, floor, std::chrono::duration<double>(t3 - t2).count());
     return newton_converged_;
+  }
+
+  /// The residual is measured as Simulation::force_balance measures it for dynamic relaxation:
+  /// against the applied loads, or, where only displacements are prescribed, the reactions of
+  /// the current state (K u_p, the linearised load, is far larger: a bar's supports push on
+  /// their neighbours over λ, the bar resists over its length). ‖V b_ext‖:
+  double applied_load_norm() const {
+    const std::vector<double>& ext = model_.external_force_density;
+    double sum = 0;
+    for (std::size_t g = 0; g < ext.size(); ++g) {
+      const double v = model_.particles.volume[g / 3] * ext[g];
+      sum += v * v;
+    }
+    return std::sqrt(sum);
+  }
+  /// ‖V b‖ over the held degrees of freedom (prescribed and dependent).
+  double reactions_norm(const std::vector<double>& force,
+                        const std::vector<std::uint8_t>& held) const {
+    double sum = 0;
+    for (std::size_t g = 0; g < held.size(); ++g) {
+      const double v = held[g] ? model_.particles.volume[g / 3] * force[g] : 0.0;
+      sum += v * v;
+    }
+    return std::max(std::sqrt(sum), 1e-300);
   }
 
   void record(const Factored& f, std::size_t iterations, double residual, double floor,
