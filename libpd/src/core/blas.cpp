@@ -1,6 +1,5 @@
 #include "libpd/core/blas.hpp"
 
-#include <cstring>
 #include <dlfcn.h>
 #include <strings.h>
 

@@ -143,16 +143,16 @@ Simulation::ForceBalance Simulation::force_balance() const {
           std::sqrt(applied_norm > 0 ? applied_norm : reactions.value())};
 }
 
-double Simulation::full_load_norm() const {
+double full_load_norm(const Model& model) {
   ExactSum applied;
-  const std::vector<double>& ext = model_.external_force_density;
+  const std::vector<double>& ext = model.external_force_density;
   for (std::size_t dof = 0; dof < ext.size(); ++dof) {
-    if (model_.ownership.owns(dof / 3)) {
-      const double f = ext[dof] * model_.particles.volume[dof / 3];
+    if (model.ownership.owns(dof / 3)) {
+      const double f = ext[dof] * model.particles.volume[dof / 3];
       applied.add(f * f);
     }
   }
-  return std::sqrt(model_.ownership.communicator().sum(applied));
+  return std::sqrt(model.ownership.communicator().sum(applied));
 }
 
 double Simulation::force_tolerance_for(double reference) const {
@@ -170,7 +170,7 @@ void Simulation::record_balance(RunResult& r) const {
 }
 
 double Simulation::steady_force_tolerance() const {
-  return force_tolerance_for(full_load_norm());
+  return force_tolerance_for(full_load_norm(model_));
 }
 
 void Simulation::save(CheckpointWriter& w) const {

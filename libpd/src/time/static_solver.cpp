@@ -51,6 +51,7 @@
 #include "libpd/kernel/linear_operator.hpp"
 #include "libpd/kernel/round_off.hpp"
 #include "libpd/time/integrator.hpp"
+#include "libpd/time/simulation.hpp"
 #include "sparse_factorisation.hpp"
 #include "static_assembly.hpp"
 
@@ -94,7 +95,7 @@ template <typename Apply, typename Precondition>
 CgResult preconditioned_cg(const Apply& apply, const Precondition& precondition,
                            const Eigen::VectorXd& b, double relative_tolerance,
                            std::size_t max_iterations) {
-  CgResult out{Eigen::VectorXd::Zero(b.size()), 0, b.norm() <= relative_tolerance * b.norm()};
+  CgResult out{Eigen::VectorXd::Zero(b.size()), 0};
   Eigen::VectorXd res = b, z = precondition(res), p = z;
   double rz = res.dot(z);
   const double stop = relative_tolerance * b.norm();
@@ -109,14 +110,14 @@ CgResult preconditioned_cg(const Apply& apply, const Precondition& precondition,
     out.x += alpha * p;
     res -= alpha * q;
     if (res.norm() <= stop) {
-      out.converged = true; // the next direction (one more preconditioner solve) is not needed
-      break;
+      break; // converged: the next direction (one more preconditioner solve) is not needed
     }
     z = precondition(res);
     const double rz_next = res.dot(z);
     p = z + (rz_next / rz) * p;
     rz = rz_next;
   }
+  out.converged = res.norm() <= stop;
   return out;
 }
 
@@ -366,11 +367,8 @@ private:
       const CgResult linear = linear_solution(f, rhs);
       place(linear.x);
       if (!linear.converged) {
-        // P is not close to K: Newton with it would be slower still (solve falls back to K).
-        linear_seconds_ = std::chrono::duration<double>(clock::now() - t_linear).count();
-        newton_converged_ = false;
-        record(f, 0, std::numeric_limits<double>::quiet_NaN(), 0,
-               std::chrono::duration<double>(clock::now() - t2).count());
+        // P is not close to K: Newton with it would be slower still. solve falls back to K,
+        // whose attempt records the details.
         return false;
       }
     }
@@ -379,7 +377,7 @@ private:
     std::transform(d.kind.begin(), d.kind.end(), held.begin(),
                    [](std::uint8_t kind) { return static_cast<std::uint8_t>(kind != 0); });
     const double floor_force = residual_round_off_floor(model_, y, held);
-    const double applied = applied_load_norm();
+    const double applied = full_load_norm(model_);
     // Converged at the tolerance dynamic relaxation is held to, or just above the round-off floor
     // where that is higher (a light load on a stiff, fine or far-off body). Newton aims at a tenth
     // of it, so that the static answer is the converged one against which relaxation's own error
@@ -429,19 +427,10 @@ private:
   }
 
   /// The residual is measured as Simulation::force_balance measures it for dynamic relaxation:
-  /// against the applied loads, or, where only displacements are prescribed, the reactions of
-  /// the current state (K u_p, the linearised load, is far larger: a bar's supports push on
-  /// their neighbours over λ, the bar resists over its length). ‖V b_ext‖:
-  double applied_load_norm() const {
-    const std::vector<double>& ext = model_.external_force_density;
-    double sum = 0;
-    for (std::size_t g = 0; g < ext.size(); ++g) {
-      const double v = model_.particles.volume[g / 3] * ext[g];
-      sum += v * v;
-    }
-    return std::sqrt(sum);
-  }
-  /// ‖V b‖ over the held degrees of freedom (prescribed and dependent).
+  /// against the applied loads (full_load_norm), or, where only displacements are prescribed,
+  /// the reactions of the current state (K u_p, the linearised load, is far larger: a bar's
+  /// supports push on their neighbours over λ, the bar resists over its length): ‖V b‖ over the
+  /// held degrees of freedom (prescribed and dependent).
   double reactions_norm(const std::vector<double>& force,
                         const std::vector<std::uint8_t>& held) const {
     double sum = 0;

@@ -161,10 +161,12 @@ private:
   double force_tolerance_for(double reference) const;
   /// The residual, its tolerance and the floor of the current state into r.
   void record_balance(RunResult& r) const;
-  /// ‖V b_ext‖ at the full load [N], 0 without loads.
-  double full_load_norm() const;
 
   double residual_floor_ = 0;
 };
+
+/// ‖V b_ext‖ at the full load [N], 0 without loads: the reference force of a residual where loads
+/// are applied (Simulation::force_balance, the static solver), summed exactly over the ranks.
+double full_load_norm(const Model& model);
 
 } // namespace pd
