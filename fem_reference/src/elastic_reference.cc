@@ -278,6 +278,7 @@ void ElasticReference<dim>::solve() {
       solve_elasticity(dof_handler, system_matrix, system_rhs, constraints, centre,
                        prm.preconditioner, prm.relative_tolerance, prm.max_iterations, solution);
   level.iterations = stats.iterations;
+  level.solver = solver_summary(stats);
   level.preconditioner_time = stats.preconditioner_time;
   level.solve_time = stats.solve_time;
 }
@@ -379,6 +380,7 @@ void ElasticReference<dim>::write_summary(const std::string& command_line,
         w.value(q.name, l.deflection.at(q.name));
       w.end_object();
       w.value("iterations", l.iterations);
+      w.value("solver", l.solver);
       w.value("setup_time_s", l.setup_time);
       w.value("assembly_time_s", l.assembly_time);
       w.value("preconditioner_setup_time_s", l.preconditioner_time);
@@ -447,7 +449,7 @@ RunSummary ElasticReference<dim>::run(const std::string& command_line,
     r.total_time = seconds_since(t0);
 
     std::cerr << "[" << prm.name << "] level " << level << ": " << joined(r.subdivisions, "x")
-              << " cells, " << r.dofs << " dofs, " << r.iterations << " CG its, assembly "
+              << " cells, " << r.dofs << " dofs, " << r.solver << ", assembly "
               << std::setprecision(3) << r.assembly_time << " s, solve " << r.solve_time << " s;";
     for (const auto& q : prm.quantities)
       std::cerr << " " << q.name << " = " << std::setprecision(8) << r.deflection[q.name];

@@ -33,6 +33,7 @@ struct LevelResult {
   double setup_time = 0., assembly_time = 0., solve_time = 0., preconditioner_time = 0.,
          total_time = 0.;
   unsigned int iterations = 0;
+  std::string solver; // solver_summary: how K u = f was solved
 };
 
 struct RunSummary {

@@ -71,6 +71,7 @@
 
 #include "elastic_reference.h"
 #include "kirchhoff_plate.h"
+#include "libpd/core/blas.hpp"
 #include "scene_reference.h"
 
 #include <boost/property_tree/json_parser.hpp>
@@ -208,6 +209,8 @@ int run_scene(const Arguments& args) {
 
 int main(int argc, char** argv) {
   using namespace dealii;
+  // The direct solves run CHOLMOD on OpenBLAS: its fast kernels on CPUs it does not recognise.
+  pd::restart_with_this_cpus_blas_kernels(argv);
   try {
     // Trilinos (Epetra) matrices need MPI to be initialised; one process,
     // threads for the assembly (all cores unless DEAL_II_NUM_THREADS).

@@ -309,6 +309,7 @@ void SceneReference<dim>::solve() {
   const CgStatistics stats = solve_elasticity(*dof_handler, system_matrix, system_rhs, constraints,
                                               centre, "AMG", 1e-10, 10000, solution);
   levels.back().iterations = stats.iterations;
+  levels.back().solver = solver_summary(stats);
 }
 
 // Why: the force a support exerts on the body is what equilibrium lacks without it: at its
@@ -414,6 +415,7 @@ void SceneReference<dim>::output_results(const double wall_time) const {
       w.begin_object();
       w.value("cells", l.cells);
       w.value("dofs", static_cast<unsigned long>(l.dofs));
+      w.value("solver", l.solver);
       w.value("h", l.h);
       w.value("seconds", l.seconds);
       w.end_object();
@@ -467,8 +469,8 @@ std::vector<SceneLevel> SceneReference<dim>::run() {
     l.seconds = seconds_since(t0);
     std::cerr << "[" << std::filesystem::path(problem.path).stem().string() << "] level " << level
               << "/" << n_levels - 1 << ": " << l.cells << " cells, " << l.dofs
-              << " dofs, h = " << std::setprecision(4) << l.h << " m, " << l.iterations
-              << " CG its, " << std::setprecision(3) << l.seconds << " s;";
+              << " dofs, h = " << std::setprecision(4) << l.h << " m, " << l.solver << ", "
+              << std::setprecision(3) << l.seconds << " s;";
     for (std::size_t k = 0; k < problem.probes.size(); ++k)
       std::cerr << " " << problem.probes[k].name << " = " << std::setprecision(8) << l.values[k];
     std::cerr << std::endl;

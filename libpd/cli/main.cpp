@@ -48,23 +48,10 @@ std::string argument_error(int argc, char** argv) {
   }
   return {};
 }
-/// Where OpenBLAS runs its SSE3 kernels on a CPU with AVX2 or AVX-512 it does not recognise
-/// (core/blas.hpp), start pd again with OPENBLAS_CORETYPE set: OpenBLAS reads it only while it
-/// loads, before main. A value the user set is kept; where the exec fails, pd runs on as it is.
-void restart_with_this_cpus_blas_kernels(char** argv) {
-  if (std::getenv("OPENBLAS_CORETYPE") != nullptr) {
-    return;
-  }
-  const std::string core = pd::openblas_core_for_this_cpu();
-  if (core.empty() || setenv("OPENBLAS_CORETYPE", core.c_str(), 1) != 0) {
-    return;
-  }
-  execv("/proc/self/exe", argv);
-}
 } // namespace
 
 int main(int argc, char** argv) {
-  restart_with_this_cpus_blas_kernels(argv);
+  pd::restart_with_this_cpus_blas_kernels(argv);
   // Under mpirun every rank runs this main; MPI lives as long as it (a no-op without MPI).
   const pd::MpiSession mpi(argc, argv);
   const bool split = pd::world_communicator().size() > 1;

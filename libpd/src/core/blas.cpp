@@ -1,7 +1,9 @@
 #include "libpd/core/blas.hpp"
 
+#include <cstdlib>
 #include <dlfcn.h>
 #include <strings.h>
+#include <unistd.h>
 
 namespace pd {
 
@@ -27,6 +29,17 @@ std::string openblas_core_for_this_cpu() {
   }
 #endif
   return {};
+}
+
+void restart_with_this_cpus_blas_kernels(char** argv) {
+  if (std::getenv("OPENBLAS_CORETYPE") != nullptr) {
+    return;
+  }
+  const std::string core = openblas_core_for_this_cpu();
+  if (core.empty() || setenv("OPENBLAS_CORETYPE", core.c_str(), 1) != 0) {
+    return;
+  }
+  execv("/proc/self/exe", argv);
 }
 
 } // namespace pd

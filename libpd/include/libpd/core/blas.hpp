@@ -16,4 +16,10 @@ std::string openblas_core();
 /// the plate's factorisation then takes 4.3 s instead of 1.9 s (Haswell kernels; 1 thread).
 std::string openblas_core_for_this_cpu();
 
+/// Where openblas_core_for_this_cpu names a kernel set, start the program again (execv of
+/// /proc/self/exe with `argv`) with OPENBLAS_CORETYPE set to it: OpenBLAS reads it only while it
+/// loads, before main, so main calls this first. A value the user set is kept; where the exec
+/// fails, the program runs on as it is.
+void restart_with_this_cpus_blas_kernels(char** argv);
+
 } // namespace pd
