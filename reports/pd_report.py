@@ -67,6 +67,11 @@ ROOT = HERE.parent
 DEFAULT_SWEEP_CASES = ["clamped-beam", "cantilever", "plate-3clamped"]
 DEFAULT_STABILITY_SCENES = ["bar-vibration.yaml"]
 FULL_STABILITY_SCENES = ["bar-vibration.yaml", "clamped-beam.yaml", "plate-3clamped.yaml"]
+# One ARKode table per order (2 to 5), one of them with β = 0 (Heun–Euler) and one measured past
+# β (Dormand–Prince): the 6- and 7-stage Cash–Karp and Fehlberg alone took 20 of the stage's 49 s.
+# --full measures every table.
+DEFAULT_STABILITY_INTEGRATORS = ["verlet", "arkode:heun-euler", "arkode:bogacki-shampine", "arkode:rk4",
+                                 "arkode:dormand-prince"]
 
 
 CASES: list[list[str]] = []   # [name, summary] of `pd verify --list`
@@ -105,7 +110,8 @@ def build_stages(ctx: S.Ctx, records: dict[str, dict]) -> list[S.Stage]:
     stages += [S.scene_stage(ctx, p) for p in S.user_scenes(ctx)]
     sweep_cases = [c for c in order if structures[c].has_sweep] if ctx.full else DEFAULT_SWEEP_CASES
     stages += [S.sweep_stage(ctx, c, listed) for c in sweep_cases]
-    stages.append(S.stability_stage(ctx, FULL_STABILITY_SCENES if ctx.full else DEFAULT_STABILITY_SCENES))
+    stages.append(S.stability_stage(ctx, FULL_STABILITY_SCENES, []) if ctx.full
+                  else S.stability_stage(ctx, DEFAULT_STABILITY_SCENES, DEFAULT_STABILITY_INTEGRATORS))
     stages += [S.compare_stage(ctx, "dynamic"), S.compare_stage(ctx, "quasistatic")]
     stages += [S.bench_stage(ctx), S.kernel_stage(ctx), S.peer_stage(ctx)]
     if ctx.full:  # LAMMPS's own thread scan; `peer` measures the ratio in every report

@@ -99,7 +99,7 @@ int verify(const VerifyArgs& a) {
   ctx.scenes_dir = a.scenes_dir.empty() ? verification::default_scenes_dir()
                                         : std::filesystem::path(a.scenes_dir);
   ctx.output_dir = a.out_dir;
-  ctx.quick_sweep = a.quick;
+  ctx.quick = a.quick;
   ctx.progress = ::isatty(STDERR_FILENO) != 0;
   if (!a.cases.empty() && std::all_of(a.cases.begin(), a.cases.end(), is_scene_file)) {
     VerifyArgs scene_args = a;
@@ -148,8 +148,8 @@ Command add_verify_command(CLI::App& app) {
   cmd->add_option("-o,--output", a->out_dir, "output folder")->capture_default_str();
   cmd->add_flag("--list", a->list, "list the cases");
   cmd->add_flag("--quick", a->quick,
-                "with --sweep: the case file's quick_sweep lists where it has them (what the "
-                "default report runs)");
+                "the default report's extent: with --sweep the case file's quick_sweep lists "
+                "where it has them; rc-beam without its s0 sensitivity runs");
   cmd->add_flag("--sweep", a->sweep,
                 "run the accuracy-vs-time sweep of each named case (the case CASE-sweep): one "
                 "JSON row per run in DIR/CASE-sweep.jsonl");

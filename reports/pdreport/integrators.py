@@ -23,7 +23,9 @@ def section(page: Page) -> str:
              "and the run counts as unstable once it has grown 1000-fold. Tables whose |R(iy)| "
              "exceeds 1 only marginally (Dormand–Prince past β, and Heun–Euler, Cash–Karp, "
              "Fehlberg with β = 0) have a finite measured limit that only the second prediction "
-             "describes; it tends to β/ω<sub>max</sub> as N grows.</p>"]
+             "describes; it tends to β/ω<sub>max</sub> as N grows. The default report measures "
+             "the bar with Verlet and one table per order (Heun–Euler, Bogacki–Shampine, RK4, "
+             "Dormand–Prince); <code>--full</code> adds the other tables and two more scenes.</p>"]
     rec = page.rec.get("stability")
     if not R.ok(rec):
         parts.append(failed_box(rec, "stability limits"))

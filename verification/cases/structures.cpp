@@ -642,8 +642,8 @@ std::vector<SweepVariant> sweep_variants(const Scene& base, const StructureCase&
 
 /// One row per run: each knob varied on its own around the scene's settings (the baseline).
 Json run_structure_sweep(const Context& ctx, const std::string& case_name) {
-  const StructureCase c = load_case(
-      ctx.scenes_dir.parent_path() / "cases" / (case_name + ".case.yaml"), ctx.quick_sweep);
+  const StructureCase c =
+      load_case(ctx.scenes_dir.parent_path() / "cases" / (case_name + ".case.yaml"), ctx.quick);
   const Scene base = load_scene((ctx.scenes_dir / c.scene).string());
   const YAML::Node fe = load_fe_summary(c.fe_reference);
   const std::vector<SweepVariant> variants = sweep_variants(base, c);
@@ -706,7 +706,7 @@ Json run_structure_sweep(const Context& ctx, const std::string& case_name) {
   out["case"] = c.name + "-sweep";
   out["quantity"] = "error vs FE and wall time for each knob (rows in " + c.name + "-sweep.jsonl)";
   out["rows"] = rows;
-  out["extent"] = ctx.quick_sweep ? "quick_sweep (pd verify --sweep --quick)" : "sweep";
+  out["extent"] = ctx.quick ? "quick_sweep (pd verify --sweep --quick)" : "sweep";
   if (spacing_error.size() >= 2) {
     const ObservedOrder order = observed_order(spacing_error);
     out["observed_order_in_spacing"] = order.order ? Json(*order.order) : Json(nullptr);

@@ -20,8 +20,9 @@ struct Context {
   std::filesystem::path scenes_dir; ///< where the shipped scenes live
   std::filesystem::path output_dir; ///< where CASE.json and run outputs go
   bool progress = false;
-  /// Sweeps run their case file's `quick_sweep:` lists where it has them (the default report).
-  bool quick_sweep = false;
+  /// The default report's extent (pd verify --quick): sweeps run their case file's
+  /// `quick_sweep:` lists where it has them, and rc-beam leaves out its s0 sensitivity runs.
+  bool quick = false;
 };
 
 struct Case {
