@@ -82,9 +82,14 @@ def dynamic_block(page: Page, rows: list[dict]) -> str:
                       num_td(fnum(r.get("force_evaluations"))), num_td(fnum(r.get("wall_seconds"), 3)),
                       esc(r.get("status", ""))])
     measure = rows[0].get("error_measure", "") if rows else ""
+    length, end = (rows[0].get("bar_length"), rows[0].get("end_time")) if rows else (None, None)
+    extent = (f" The bar is {length:g} m long and runs to t = {end:.4g} s (the default report's "
+              "<code>pd compare dynamic --quick</code>: half the case's bar for one period; "
+              "<code>--full</code>: the case itself, 1 m for 6.4 periods, and finer steps)."
+              if length and end else "")
     return (f'<img src="{img}" alt="integrator accuracy vs cost">'
             f'<p class="note">error measure: {esc(measure)}; error vs the modal series includes '
-            "the PD model's own (spatial) error, which is the floor the curves reach.</p>" +
+            f"the PD model's own (spatial) error, which is the floor the curves reach.{extent}</p>" +
             table(["integrator", "Δt (s)", "Δt / eq. 31", "error vs modal series",
                    "error vs PD reference", "force evaluations", "wall (s)", "status"], trows))
 
@@ -118,13 +123,14 @@ def quasistatic_block(page: Page, rows: list[dict]) -> str:
         if ok_rows:
             fastest = min(ok_rows, key=lambda i: walls[i])
         ref = next((i for i, r in enumerate(rows) if r.get("integrator") == "damped-euler"), None)
-        reading = f"Fastest to steady state: {labels[fastest]} ({walls[fastest]:.1f} s"
+        reading = f"Fastest to steady state: {labels[fastest]} ({walls[fastest]:.2g} s"
         if ref is not None and walls[fastest] > 0:
             reading += f", {walls[ref] / walls[fastest]:.2g}× faster than damped Euler"
         reading += ")."
     if spacing:
         reading += (f" Clamped beam at λ = {spacing:g} m (the default report's `pd compare quasistatic "
-                    "--quick` takes twice the paper's spacing; --full runs it at the paper's).")
+                    "--quick` takes twice the paper's spacing and one ARKode table, rk4; --full runs "
+                    "the paper's spacing and adds Bogacki–Shampine and adaptive Dormand–Prince).")
     return (f'<img src="{img}" alt="time to steady state">' +
             (f'<p class="reading">{esc(reading)}</p>' if reading else "") +
             table(["integrator", "Δt (s)", "steps", "force evaluations", "wall (s)",

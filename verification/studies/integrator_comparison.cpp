@@ -199,6 +199,8 @@ void compare_integrators_dynamic(const std::filesystem::path& scenes_dir, bool q
     j["error"] = std::sqrt(rms / samples) / norm;
     j["error_vs_reference_pd"] = reference.empty() ? 0.0 : std::sqrt(rms_ref / samples) / norm;
     j["error_measure"] = "free-end history RMS / (eps L)";
+    j["bar_length"] = length;
+    j["end_time"] = base.solver.end_time.value_or(0.0);
     j["force_evaluations"] = ro.result.force_evaluations;
     j["wall_seconds"] = ro.result.wall_seconds;
     j["steps"] = ro.result.steps;
