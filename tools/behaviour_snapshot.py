@@ -13,7 +13,9 @@
     bytes themselves;
   * `pd stability --steps 200` on the bar.
 Numbers are kept exactly (JSON floats round-trip), and only fields that measure the machine rather
-than the model are dropped (wall times, rates, load, memory available; absolute paths keep only their file name).
+than the model are dropped (wall times, rates, load, memory available, peak memory, the output
+folder's lock, which holds the process id; durations inside messages; absolute paths keep only
+their file name).
 `diff` compares two snapshots file by file and byte by byte.
 """
 from __future__ import annotations
@@ -21,6 +23,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -40,7 +43,10 @@ SECTION_SCENES = [("clamped-beam.yaml", []), ("cantilever.yaml", []),
 CHECKPOINT_TEST = ROOT / "tests" / "checkpoint" / "kill_restart_test.py"
 RUN_VARIANTS = ["damped-euler", "verlet", "adr", "arkode-rk4"]
 MACHINE_WORDS = ("wall", "seconds", "per_second", "load_average", "memory_available",
-                 "restarted_from", "checkpoint", "output_dir", "scene_path", "threads")
+                 "peak_memory", "pd-lock", "restarted_from", "checkpoint", "output_dir",
+                 "scene_path", "threads")
+# Durations inside free text (the static solver's summary message: "assembly 0.677 s, ...").
+DURATION = re.compile(r"\b\d+\.\d+ s\b")
 
 
 def machine_field(key: str) -> bool:
@@ -54,6 +60,8 @@ def normalise(value):
         return [normalise(v) for v in value]
     if isinstance(value, str) and value.startswith("/"):
         return Path(value).name  # where the tree or the snapshot lives is not a result
+    if isinstance(value, str):
+        return DURATION.sub("<duration>", value)
     return value
 
 
