@@ -159,7 +159,6 @@ void add_elastic_cell_matrix(const FEValues<dim>& fv, const std::vector<unsigned
       cell_matrix(i, j) = cell_matrix(j, i);
 }
 
-
 // Why: the stiffness matrix is symmetric positive definite once the supported dofs are
 // eliminated. Up to direct_solver_max_dofs unknowns it is factored (sparse Cholesky, CHOLMOD):
 // ML's smoothed aggregation needed 230-280 CG iterations to 1e-10 on the slender and notched

@@ -34,7 +34,6 @@ struct SceneLevel {
   types::global_dof_index dofs = 0;
   double h = 0.;       // target cell size of the level, m
   double seconds = 0.; // wall time of the level
-  unsigned int iterations = 0;
   std::string solver; // solver_summary: how K u = f was solved
   std::vector<double> values; // one per probe
 };

@@ -623,7 +623,8 @@ def peer_stage(ctx: Ctx) -> Stage:
     inp = ctx.root / "reports" / "lammps" / "model-a.in"
     cmds = [[str(ctx.pd), "bench", str(scene), "--threads", "1", "--stretch", s, "--steps", "300",
              "--repeats", "7" if ctx.full else "3", "--lammps", lmp or "lmp",
-             "--lammps-steps", "300" if ctx.full else "100", "--json"] + (["--damage"] if damage else []) for s, damage in PEER_CONFIGS]
+             "--lammps-steps", "300" if ctx.full else "100", "--json"]
+            + (["--damage"] if damage else []) for s, damage in PEER_CONFIGS]
 
     def fn(ctx: Ctx, st: Stage) -> dict:
         if not lmp:
