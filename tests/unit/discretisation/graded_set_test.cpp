@@ -2,11 +2,53 @@
 #include "libpd/discretisation/graded_set.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdio>
 #include <gtest/gtest.h>
 #include <numbers>
+#include <vector>
 
 namespace {
+
+/// The exact area of point `a`'s Voronoi cell within the box [lo, hi]²: the box clipped by the
+/// bisector of a and every other point (Sutherland–Hodgman), then the shoelace formula.
+double voronoi_area(const std::vector<pd::Vec3>& points, std::size_t a, const pd::Vec3& lo,
+                    const pd::Vec3& hi) {
+  using Point = std::array<double, 2>;
+  std::vector<Point> cell{{lo[0], lo[1]}, {hi[0], lo[1]}, {hi[0], hi[1]}, {lo[0], hi[1]}};
+  const Point pa{points[a][0], points[a][1]};
+  for (std::size_t b = 0; b < points.size(); ++b) {
+    if (b == a) {
+      continue;
+    }
+    // Keep the side nearer a: n·x ≤ n·m with n = b − a and m the midpoint.
+    const Point n{points[b][0] - pa[0], points[b][1] - pa[1]};
+    const double limit = n[0] * (pa[0] + 0.5 * n[0]) + n[1] * (pa[1] + 0.5 * n[1]);
+    const auto side = [&](const Point& x) { return n[0] * x[0] + n[1] * x[1] - limit; };
+    std::vector<Point> kept;
+    for (std::size_t k = 0; k < cell.size(); ++k) {
+      const Point& p = cell[k];
+      const Point& q = cell[(k + 1) % cell.size()];
+      const double sp = side(p), sq = side(q);
+      if (sp <= 0) {
+        kept.push_back(p);
+      }
+      if ((sp < 0 && sq > 0) || (sp > 0 && sq < 0)) {
+        const double t = sp / (sp - sq);
+        kept.push_back({p[0] + t * (q[0] - p[0]), p[1] + t * (q[1] - p[1])});
+      }
+    }
+    cell = std::move(kept);
+  }
+  double twice = 0;
+  for (std::size_t k = 0; k < cell.size(); ++k) {
+    const Point& p = cell[k];
+    const Point& q = cell[(k + 1) % cell.size()];
+    twice += p[0] * q[1] - q[0] * p[1];
+  }
+  return 0.5 * std::abs(twice);
+}
 
 pd::GradedSetSpec disk() {
   pd::GradedSetSpec s;
@@ -111,6 +153,32 @@ TEST(GradedSet, BoxZonesGrowByTheGrading) {
   };
   EXPECT_NEAR(0.5 / static_cast<double>(rows(x[0])), x[1] - x[0], 0.2 * (x[1] - x[0]));
   EXPECT_GT(rows(x[0]), 5 * rows(x[19]));
+}
+
+TEST(GradedSet, MovedParticlesGetTheirVoronoiAreas) {
+  // A square of 12 × 12 particles with the Monte Carlo noise: each particle's volume is the area
+  // nearest to it, measured by sampling; here against the exact cell by clipping.
+  pd::GradedSetSpec s;
+  s.shape = pd::GradedShape::box;
+  s.box = pd::Box{{0, 0, 0}, {1, 1, 0}};
+  s.zones = {4, 4};
+  s.pattern = 3;
+  const double thickness = 0.5;
+  const pd::PointCloud p = pd::generate_graded_set(s, thickness);
+  double sum = 0, worst = 0, spread = 0;
+  for (std::size_t a = 0; a < p.count(); ++a) {
+    const double exact = voronoi_area(p.position, a, s.box.lo, s.box.hi) * thickness;
+    worst = std::max(worst, std::abs(p.volume[a] / exact - 1.0));
+    spread = std::max(spread, std::abs(exact / (thickness / 144.0) - 1.0));
+    sum += p.volume[a];
+  }
+  std::printf("sampled against exact Voronoi areas: worst %.2f %%, cells off the pattern's by up "
+              "to %.0f %%\n",
+              100 * worst, 100 * spread);
+  EXPECT_NEAR(sum, thickness, 1e-12); // every sample's area goes to some particle
+  // 256 samples per sub-cell; measured worst 3.1 % (the smallest cells hold the fewest samples).
+  EXPECT_LT(worst, 0.06);
+  EXPECT_GT(spread, 0.2); // the noise does move the cells far off the pattern's 1/144
 }
 
 } // namespace

@@ -9,8 +9,11 @@
 //   x = c cosh ξ cos η,  y = c sinh ξ sin η,  ξ ∈ (0, ξ_max], η ∈ [0, 2π),
 // uniform in ξ and η, so that zones shrink towards the focal points (the tips of the crack
 // between them, ξ = 0), and a box whose zone widths along x grow geometrically. The result is a
-// point cloud (discretisation/point_cloud.hpp) like a particle file's, with each particle's
-// volume its zone's area over p² (times the 2D thickness). Deterministic for a given seed.
+// point cloud (discretisation/point_cloud.hpp) like a particle file's. Each particle's volume is
+// its sub-cell's area (its zone's over p², times the 2D thickness) in the regular pattern and,
+// once the Monte Carlo moves have carried it off that sub-cell, the area of the body nearer to it
+// than to any other particle on its side of the crack (its Voronoi cell). Deterministic for a
+// given seed.
 #pragma once
 
 #include "libpd/core/geometry.hpp"
