@@ -60,10 +60,12 @@ def convergence(page: Page) -> str:
     rows = [[num_td(str(r["pattern"])), num_td(fnum(r["particles"])), num_td(fnum(r["interior_particles"])),
              num_td(fnum(r["arms"])), num_td(fnum(r["rms"], 4)), num_td(fnum(r["l2"], 4)),
              num_td(fnum(r.get("rms_beyond_quarter_c_of_the_tips"), 4)),
+             num_td(fnum(r.get("crack_opening_ratio"), 5)),
              num_td(fnum(r["rms_metres"], 4)), esc(r["status"]), num_td(fnum(r["steps"])),
              num_td(fnum(r["setup_seconds"], 3)), num_td(fnum(r["solve_seconds"], 3))] for r in runs]
     out.append(table(["per zone side", "particles", "interior", "arms", "RMS (relative)",
-                      "L2 (volume-weighted)", "RMS beyond c/4 of the tips", "RMS (m)", "status", "ADR steps", "set-up (s)",
+                      "L2 (volume-weighted)", "RMS beyond c/4 of the tips",
+                      "crack opening / eq. 116", "RMS (m)", "status", "ADR steps", "set-up (s)",
                       "solve (s)"], rows, 'id="fibre-disk-table"'))
     regular = page.rec.get(f"verify:{REGULAR_CASE}")
     if R.ok(regular):
