@@ -340,8 +340,11 @@ struct Balance {
 /// of 1,800 particles, every particle with a first moment up to 0.4 balanced: 724 of the 761
 /// balanced particles farther than two horizons from any edge need an arm cut by more than
 /// 90 %), and holding those arms at the floor only moves the demand on: the residual grows to
-/// 0.7 after 8 passes. The balance then needs more freedom than the weights of the arms (a
-/// larger neighbourhood, or moving the particles), which this function does not have.
+/// 0.7 after 8 passes (measured with the sub-cell volumes the graded sets had before d9bb363; with
+/// their Voronoi areas 0.4–0.7 % of the arms still need cuts beyond 90 %). The balance then needs
+/// more freedom than the weights of the arms (a larger neighbourhood: at α = 8, about 30 arms per
+/// particle, it applies on the same disks; verification/cases/ELLIPTIC_DISK.md), which this
+/// function does not have.
 Balance balance_arms(int dim, const ParticleSet& particles, const BondFamily& family,
                      const std::vector<std::uint8_t>& interior, std::vector<double>& own) {
   constexpr double floor = 0.1;
