@@ -100,8 +100,9 @@ void cut_to_ellipse(const EllipticDiskSpec& s, BodySpec& body) {
 /// The path band: the particles inside it replaced by a lattice of `spacing` (columns and rows
 /// rounded to fill the band exactly; an even number of rows, so that none lies on the crack's
 /// line y = 0), each with its cell's area as volume, and every size again by eq. 115. Outside the
-/// band the graded particles keep their zones' volumes, so the cells cut by the band's edge are
-/// counted once on either side (EllipticDisk.PathBandTilesTheDisk measures what that costs).
+/// band the graded particles keep the volumes the generator gave them (their Voronoi cells among
+/// all the graded particles, graded_set.hpp), so the cells cut by the band's edge are counted
+/// once on either side (EllipticDisk.PathBandTilesTheDisk measures what that costs).
 void fill_path_band(const EllipticDiskSpec& s, double thickness, BodySpec& body) {
   const PathBand& band = s.path_band;
   if (!(band.spacing > 0 && band.half_length > 0 && band.half_width > 0)) {

@@ -33,7 +33,8 @@
 // short (2026-11-27, seed 1, the Monte Carlo sets' particles given their Voronoi areas by
 // graded_set.cpp, --threads 1), RMS error (L2):
 //   elliptic-disk             1,800 … 7,200: 2.03, 1.60, 1.51, 1.14 % (1.84, 1.53, 1.37, 1.06 %),
-//                             order 0.77 in spacing, passes (seeds 2–5, 64 samples: orders 0.88–1.00).
+//                             order 0.77 in spacing, passes (seeds 2–5, 64 samples: orders
+//                             0.88–1.00).
 //   elliptic-disk-convergence 7,200 … 39,200: 1.23, 1.17, 1.08, 0.917, 0.914 % (1.16, 1.03, 0.93,
 //                             0.79, 0.78 %), order 0.39, passes by 0.3 % of the error at the
 //                             last step; seed 2 does not fall from 20,000 to 28,800 (0.97,
@@ -141,8 +142,8 @@ DiskError run_disk(const Context& ctx, const EllipticDiskSpec& spec, const std::
   j["l2"] = l2;
   j["rms_metres"] = std::sqrt(error2 / static_cast<double>(interior));
   j["rms_beyond_quarter_c_of_the_tips"] = std::sqrt(far_error2 / far_exact2);
-  j["crack_opening_ratio"] =
-      face_particles ? Json(opening_ratio / static_cast<double>(face_particles)) : Json{};
+  const double opening = face_particles ? opening_ratio / static_cast<double>(face_particles) : 0.0;
+  j["crack_opening_ratio"] = face_particles ? Json(opening) : Json{};
   j["status"] = to_string(run.result.status);
   j["steps"] = run.result.steps;
   j["setup_seconds"] = run.setup_seconds;
@@ -152,9 +153,8 @@ DiskError run_disk(const Context& ctx, const EllipticDiskSpec& spec, const std::
   }
   fmt::print("   {:>6} particles ({} interior): RMS error {:.4e} (L2 {:.4e}), crack opening × "
              "{:.4f}, {} steps, {}, set-up {:.1f} s, solve {:.1f} s\n",
-             run.particles, interior, out.rms, l2,
-             face_particles ? opening_ratio / static_cast<double>(face_particles) : 0.0,
-             run.result.steps, out.converged ? "converged" : "NOT converged", run.setup_seconds,
+             run.particles, interior, out.rms, l2, opening, run.result.steps,
+             out.converged ? "converged" : "NOT converged", run.setup_seconds,
              run.result.wall_seconds);
   std::fflush(stdout); // a long case shows each run as it ends
   return out;

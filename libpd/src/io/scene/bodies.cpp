@@ -68,7 +68,8 @@ constexpr Key graded_keys[] = {
      .bind = field_with_default<&GradedSetSpec::min_spacing>()},
     {.name = "sweeps",
      .type = Type::integer,
-     .doc = "Monte Carlo sweeps over all particles; sizes are refreshed every fifth",
+     .doc = "Monte Carlo sweeps over all particles; sizes are refreshed every fifth; once "
+            "particles have moved, each one's volume is its Voronoi cell",
      .range = non_negative,
      .bind = field_with_default<&GradedSetSpec::sweeps>()},
     {.name = "seed",
