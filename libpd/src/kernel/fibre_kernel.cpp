@@ -8,13 +8,16 @@
 // With `plasticity` the arms are elastic–perfectly plastic (eq. 111): the shear part acts on
 // ε_k − ε^p_k, and ε^p_k follows the arm's strain wherever |ε_k − ε^p_k| would exceed the yield
 // strain (the material's yield_stretch); ε̄ stays the mean of the total strains (eq. 110), so the
-// plastic volumetric strain is zero. With `damage` an arm fails for good once its plastic
-// elongation ε^p_k |ξ_k| exceeds the material's elongation_limit δ_e (eq. 118; stored per arm as
-// the plastic strain δ_e/|ξ_k|); failed arms carry nothing and leave the mean strain, which is then
-// the weighted mean over the intact arms. The damage index is the failed fraction, 1 − φ of
-// eq. 119. `make_force_evaluator` hands a
-// model whose effect set selects the fibre model to this kernel; the bond-based kernels are not
-// touched, so runs of the default model are the same instructions as before.
+// plastic volumetric strain is zero. In a quasi-static increment (BondState::
+// plastic_stretch_at_increment_start set) ε^p_k is recomputed at every evaluation from its value
+// at the increment's start, so that it is a function of the current strain only: ADR's fictitious
+// path to equilibrium leaves no plastic strain of its own (time/quasi_static.hpp). With `damage` an
+// arm fails for good once its plastic elongation ε^p_k |ξ_k| exceeds the material's
+// elongation_limit δ_e (eq. 118; stored per arm as the plastic strain δ_e/|ξ_k|); failed arms carry
+// nothing and leave the mean strain, which is then the weighted mean over the intact arms. The
+// damage index is the failed fraction, 1 − φ of eq. 119. `make_force_evaluator` hands a model whose
+// effect set selects the fibre model to this kernel; the bond-based kernels are not touched, so
+// runs of the default model are the same instructions as before.
 //
 // Threads split the particle loops statically; each particle's sum runs in CSR order whatever the
 // thread count, so forces are bitwise identical for any number of threads.
@@ -43,6 +46,8 @@ public:
   }
 
   void compute(const double* y, double* b) override {
+    const auto& start = model_.state.plastic_stretch_at_increment_start;
+    plastic_start_ = start.size() == model_.family.directed_bond_count() ? start.data() : nullptr;
     mean_strains(y);
     const auto n = static_cast<std::ptrdiff_t>(model_.size());
 #pragma omp parallel for schedule(static) if (model_.size() >= parallel_min_particles)
@@ -107,6 +112,9 @@ private:
       if constexpr (Plastic) {
         // Eq. 111. Both directions of an arm see the same r², so their histories stay equal.
         double& plastic = model_.state.plastic_stretch[k];
+        if (plastic_start_ != nullptr) {
+          plastic = plastic_start_[k];
+        }
         const double yield = model_.field.bond_yield_stretch[k];
         if (strain - plastic > yield) {
           plastic = strain - yield;
@@ -181,8 +189,9 @@ private:
   }
 
   Model& model_;
-  std::vector<double> mean_weight_; ///< A_k |ξ_k| / N per directed bond
-  std::vector<double> mean_strain_; ///< ε̄ per particle, pass 1's result
+  std::vector<double> mean_weight_;       ///< A_k |ξ_k| / N per directed bond
+  std::vector<double> mean_strain_;       ///< ε̄ per particle, pass 1's result
+  const double* plastic_start_ = nullptr; ///< ε^p at the increment's start, in quasi-static runs
 };
 
 template <bool Plastic>

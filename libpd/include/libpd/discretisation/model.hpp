@@ -43,6 +43,10 @@ struct BondState {
   std::vector<std::uint8_t> broken;    ///< per directed bond, damage only
   std::vector<double> plastic_stretch; ///< per directed bond, plasticity only
   std::vector<double> damage;          ///< per particle damage index φ (eq. 13), damage only
+  /// Set by the quasi-static driver (time/quasi_static.hpp) for the fibre model: each arm's
+  /// plastic stretch at the start of the current increment, from which the kernel recomputes it
+  /// at every evaluation. Empty otherwise (the plastic stretch then accumulates in place).
+  std::vector<double> plastic_stretch_at_increment_start;
 };
 
 struct BoxRegionLoad {
