@@ -51,9 +51,14 @@
 // ~226,000 arms) and a fine load step. `griffith` (CI) runs 16 × 16 zones of 3 × 3 (2,304
 // particles) at ΔS = 0.01 σ_y over 5 elongation limits; `griffith-full` 27 × 20 zones of 4 × 4
 // and the path band (10,180 particles) at ΔS = 0.005 σ_y over the paper's 11 (c/750 … c/3250).
-// The failure stress is not converged in the path's spacing (+25 % from c/32 to c/64, and the
-// ratio then fails the gate at −11.4 %; the gated pair at c/32 passes at −1.1 %): see
-// verification/cases/GRIFFITH.md for the numbers and what each can show.
+// Each increment's plastic flow is recomputed from its start (time/quasi_static.cpp), so ADR's
+// path to equilibrium leaves none of its own; before that, σ_f at c/3250 rose 25 % from path
+// spacing c/32 to c/64 and the ratio failed the gate there (−11.4 %). Now the ratio is −2.6,
+// −4.4, −2.5 and −3.9 % at c/32, c/48, c/64 and c/96. σ_f itself settles once the horizon is
+// below about 0.6 of the process zone (≈ 216 δ_e): at δ_e = c/750 it moves by less than 2 % with
+// the spacing, at c/1500 by 10 % from c/32 to c/64 and 1.5 % to c/96; at c/3250 (zone ≈ 0.07 c,
+// horizon 0.16 c … 0.05 c) it still rises (0.454 → 0.558 from c/32 to c/96). Numbers and
+// commands: verification/cases/GRIFFITH.md.
 #include "cases.hpp"
 #include "curve_recorder.hpp"
 #include "elliptic_disk.hpp"
