@@ -22,8 +22,9 @@
 // Plastic flow within an increment: ADR's iterations are a fictitious path, so for the
 // virtual-fibre model each arm's plastic stretch is recomputed at every evaluation from its value
 // at the increment's start (BondState::plastic_stretch_at_increment_start), and the increment's
-// converged state alone fixes it. The bond-based kernels' micro-plastic bonds still accumulate it
-// along the path (their rc-beam and compression-cube results are measured that way).
+// converged state alone fixes it. The bond-based kernels' micro-plastic bonds would still
+// accumulate it along the path; no quasi-static case uses them (rc-beam and compression-cube
+// have brittle bonds).
 //
 // Method::static_ instead solves each level with the static solver, which breaks bonds in events
 // at equilibrium (time/static_solver.cpp); the observer sees the same Simulation interface.
