@@ -119,15 +119,23 @@ private:
 
   // The balance of a point cloud's arms (discretisation/fibre_arms.hpp) is all or nothing: where
   // its conditions cannot be met with positive weights it is not applied, and interior
-  // particles keep the force imbalance of their irregular arrangement. Such a run must say so.
+  // particles keep the force imbalance of their irregular arrangement. The moduli are then
+  // corrected for the relaxation that imbalance allows; the run says both.
   void check_fibre_balance() {
     const FibreArms& a = model_.fibre_arms;
     if (a.balance_passes > 0 && !a.balance_applied) {
-      warn(fmt::format("virtual fibres: the arm balance was not applied (relative residual {:.2g} "
-                       "after {} passes, {} arms at their floor): under a homogeneous strain "
-                       "interior particles keep forces of order 0.2 σ/h; a more regular particle "
-                       "set avoids this",
-                       a.balance_residual, a.balance_passes, a.balance_floored));
+      warn(fmt::format(
+          "virtual fibres: the arm balance was not applied (relative residual {:.2g} after {} "
+          "passes, {} arms at their floor): under a homogeneous strain interior particles keep "
+          "forces of order 0.2 σ/h. {}",
+          a.balance_residual, a.balance_passes, a.balance_floored,
+          a.relaxed.applied
+              ? fmt::format("Their relaxation releases {:.1f} % (isotropic) and {:.1f} % "
+                            "(deviatoric) of a homogeneous strain's energy; the particles' moduli "
+                            "are raised to match",
+                            100 * a.relaxed.bulk, 100 * a.relaxed.shear)
+              : std::string("The relaxed moduli could not be measured (no particle away from a "
+                            "surface): the body is softer than its material")));
     }
   }
 

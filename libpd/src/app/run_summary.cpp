@@ -77,6 +77,14 @@ Json run_summary(const Scene& scene, const Simulation& sim, const RunOutcome& ou
     fb["arms_at_floor"] = model.fibre_arms.balance_floored;
     fb["passes"] = model.fibre_arms.balance_passes;
     fb["applied"] = model.fibre_arms.balance_applied;
+    if (const auto& r = model.fibre_arms.relaxed; r.applied) {
+      Json& rj = fb["relaxed_moduli"]; // discretisation/fibre_relaxation.cpp
+      rj["relaxed_particles"] = r.free;
+      rj["bulk_energy_released"] = r.bulk;
+      rj["shear_energy_released"] = r.shear;
+      rj["shear_fraction_range"] = Json::array_of(std::vector<double>{r.shear_low, r.shear_high});
+      rj["fractions_bounded"] = r.bounded;
+    }
   }
   if (!scene.model.cracks.empty()) {
     Json& cj = j["cracks"]; // pairs of particles a crack kept from bonding

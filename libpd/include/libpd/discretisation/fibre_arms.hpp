@@ -28,8 +28,15 @@
 // with a full horizon has zero third moment (no net force under any homogeneous strain: the
 // integration constraint of meshfree methods) and the isotropic fourth moments, and every other
 // particle keeps its fourth moments; 1e-7 σ/h is left. Arms are held at 10 % of their weight at
-// least; where the conditions cannot then be met (the Monte Carlo sets of Fig. 8) nothing is
-// changed. Arm tensions stay equal and opposite at both ends and derive from the energy below.
+// least; where the conditions cannot then be met (the Monte Carlo sets of Fig. 8) no weight is
+// changed, and the interior forces let the particles relax off a homogeneous field: the body is
+// then softer than its material, more in shear than in bulk (about 4.6 % and 7.2 % of the energy
+// on the disks of Fig. 8 at Table 1's α, so ν 0.305 for 0.3, at every density).
+// fibre_relaxation.cpp's relax_moduli measures that relaxation once (each homogeneous strain
+// imposed, the particles near a surface held, the rest solved to equilibrium with the linearised
+// stiffness) and raises each particle's shear and bulk constants by what its neighbourhood
+// releases, so that the relaxed network has the material's moduli. Arm tensions stay equal and
+// opposite at both ends and derive from the energy below.
 //
 // Particles that are extrapolated (ghosts, quadratic clamps: ghost_layers.hpp) own no energy:
 // their A is zero, so each body particle stores the bulk energy of the field it sees
@@ -62,6 +69,20 @@ struct FibreArms {
   std::size_t balance_floored = 0;
   int balance_passes = 0;
   bool balance_applied = false;
+  /// Where the balance is not applied: the relaxed network's moduli made the material's
+  /// (fibre_relaxation.cpp, relax_moduli). The body-wide fractions of a homogeneous strain's energy
+  /// that the particles' relaxation releases (isotropic and deviatoric modes, before the
+  /// correction), the particles relaxed, the range of the per-particle deviatoric fractions
+  /// applied, and how many per-particle fractions were held in [0, 0.5].
+  struct RelaxedModuli {
+    bool applied = false;
+    std::size_t free = 0;
+    double bulk = 0;
+    double shear = 0;
+    double shear_low = 0;
+    double shear_high = 0;
+    std::size_t bounded = 0;
+  } relaxed;
 
   bool empty() const { return own.empty(); }
 };
