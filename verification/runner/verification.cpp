@@ -179,8 +179,8 @@ const std::vector<Case>& all_cases() {
        "griffith-full's c^(-1/2) pair with the crack's path at spacing c/64 (slow)",
        run_griffith_resolution},
       {"griffith-table1",
-       "griffith at Table 1's particle density (25,000 particles), three elongation limits "
-       "(slow)",
+       "griffith at Table 1's particle density (25,000 particles), the paper's eleven elongation "
+       "limits (slow)",
        run_griffith_table1},
   });
   return cases;
