@@ -29,22 +29,19 @@
 // zone side (1,800 … 7,200 particles). `elliptic-disk-convergence` (verification-full): the
 // paper's grid, 20 × 40 zones, 3…7 particles per side (7,200 … 39,200), Fig. 10's densities.
 //
-// Measured, the diagnosis of what does not converge and what was tried: ELLIPTIC_DISK.md. In
-// short (2026-11-27, seed 1, the Monte Carlo sets' particles given their Voronoi areas by
-// graded_set.cpp, --threads 1), RMS error (L2):
-//   elliptic-disk             1,800 … 7,200: 2.03, 1.60, 1.51, 1.14 % (1.84, 1.53, 1.37, 1.06 %),
-//                             order 0.77 in spacing, passes (seeds 2–5, 64 samples: orders
-//                             0.88–1.00).
-//   elliptic-disk-convergence 7,200 … 39,200: 1.23, 1.17, 1.08, 0.917, 0.914 % (1.16, 1.03, 0.93,
-//                             0.79, 0.78 %), order 0.39, passes by 0.3 % of the error at the
-//                             last step; seed 2 does not fall from 20,000 to 28,800 (0.97,
-//                             1.00 %). Far from the crack the error falls; near it, it does not:
-//                             the crack opens 0.8–1.1 % too wide at every density
-//                             (`crack_opening_ratio`), which the arms' weights leave, not
-//                             balanced on these sets at Table 1's α.
-//   elliptic-disk-regular     (no noise, CI grid) 0.62, 0.38, 0.27 % (0.35, 0.20, 0.14 %), order
-//                             1.61, crack opening 1.0016 → 1.0005: the balance applies and the
-//                             error falls.
+// Measured, and the diagnosis of what did not converge before the relaxed moduli
+// (fibre_relaxation.cpp): ELLIPTIC_DISK.md. In short (2026-11-28, seed 1, --threads 1), RMS
+// error and crack opening ratio:
+//   elliptic-disk             1,800 … 7,200: 1.79, 1.41, 1.12, 0.89 %, openings 0.9987–1.0001,
+//                             order 1.00 in spacing (seeds 2–5: 1.06–1.28).
+//   elliptic-disk-convergence 7,200 … 39,200: 0.98, 0.75, 0.62, 0.48, 0.43 %, openings
+//                             0.9979–0.9996, order 0.99 (seeds 2, 3: 1.00, 1.01). Before the
+//                             correction the crack opened 1 % too wide at every density (the
+//                             unbalanced network's Poisson ratio, 0.305 for 0.3), the order was
+//                             0.39 and seed 2 failed.
+//   elliptic-disk-regular     (no noise, CI grid) 0.62, 0.38, 0.27 % (L2 0.35, 0.20, 0.14 %), order
+//                             1.61, crack opening 1.0016 → 1.0005: the balance applies, no
+//                             relaxation is needed.
 // ADR's steady state (force 1e-7, kinetic 1e-12) is far below the error: 1e-10 / 1e-20 leave
 // every RMS of elliptic-disk unchanged in 4 digits.
 #include "cases.hpp"
