@@ -544,8 +544,11 @@ Json run_griffith_full(const Context& ctx) {
 }
 
 Json run_griffith_boundary(const Context& ctx) {
-  // griffith-full's c^(−1/2) pair on a larger disk: does the failure stress still move with it?
-  Variant v = path_variant("griffith-boundary", 3.2, 32, {3250});
+  // griffith-resolution's c^(−1/2) pair on a larger disk: does the failure stress still move
+  // with it? At the path spacing of griffith-resolution, c/64, where the horizon is below the
+  // c/3250 process zone: at griffith-full's c/32 it is not, and the pair moved from −3.3 % to
+  // −6.1 % with the boundary, against +1.4 % and +1.9 % at c/64 (GRIFFITH.md, 2026-11-28).
+  Variant v = path_variant("griffith-boundary", 3.2, 64, {3250});
   v.fit_gated = false;
   v.half_delta_pair = false;
   return run_variant(ctx, v);

@@ -173,7 +173,8 @@ const std::vector<Case>& all_cases() {
        "griffith on a larger disk (xi_max 2.7) with the crack's path at one spacing (c/32), "
        "11 elongation limits (slow)",
        run_griffith_full},
-      {"griffith-boundary", "griffith-full's c^(-1/2) pair on a larger disk, xi_max 3.2 (slow)",
+      {"griffith-boundary",
+       "griffith-resolution's c^(-1/2) pair (path c/64) on a larger disk, xi_max 3.2 (slow)",
        run_griffith_boundary},
       {"griffith-resolution",
        "griffith-full's c^(-1/2) pair with the crack's path at spacing c/64 (slow)",
