@@ -4,10 +4,6 @@
 #include "libpd/discretisation/point_cloud.hpp"
 
 #include <Eigen/Dense>
-#include <Eigen/Sparse>
-#ifdef LIBPD_HAVE_SUITESPARSE
-#include <Eigen/CholmodSupport>
-#endif
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -256,11 +252,7 @@ void least_change(const Conditions& c, const std::vector<double>& g,
   for (Eigen::Index d = 0; d < rows; ++d) {
     shifted.coeffRef(d, d) += 1e-12 * largest;
   }
-#ifdef LIBPD_HAVE_SUITESPARSE
-  Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>> factor(shifted);
-#else
-  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> factor(shifted);
-#endif
+  const fibre_detail::SparseCholesky factor(shifted);
   if (factor.info() != Eigen::Success) {
     throw std::runtime_error("virtual fibres: the arm balance's normal matrix could not be "
                              "factored");
@@ -396,16 +388,13 @@ std::vector<std::uint8_t> full_horizons(int dim, const ParticleSet& particles,
                                         const std::vector<std::uint8_t>& owns_energy,
                                         const std::vector<double>& own) {
   const std::size_t n = particles.size();
-  std::vector<std::uint8_t> surface(n, 0), full(n, 0);
+  std::vector<std::uint8_t> surface(n, 0);
   for (std::size_t i = 0; i < n; ++i) {
     surface[i] = !owns_energy[i] || first_moment(dim, particles, family, i, own) > 0.2 ? 1 : 0;
   }
-  for (std::size_t i = 0; i < n; ++i) {
-    bool near = surface[i] != 0;
-    for (std::size_t k = family.offsets[i]; k < family.offsets[i + 1] && !near; ++k) {
-      near = surface[family.neighbour[k]] != 0;
-    }
-    full[i] = near ? 0 : 1;
+  std::vector<std::uint8_t> full = fibre_detail::marked_or_next_to(family, surface);
+  for (std::uint8_t& f : full) {
+    f = f ? 0 : 1;
   }
   return full;
 }

@@ -1,9 +1,5 @@
 #include "fibre_relaxation.hpp"
 
-#include <Eigen/Sparse>
-#ifdef LIBPD_HAVE_SUITESPARSE
-#include <Eigen/CholmodSupport>
-#endif
 #include <algorithm>
 #include <numbers>
 
@@ -45,7 +41,7 @@ std::vector<std::uint8_t> near_surface(const ModelDimension& d, const FibreKerne
     }
     filled[i] = owns_energy[i] ? weighted / (volume_unit * sphere * moment / size[i]) : 0.0;
   }
-  std::vector<std::uint8_t> thin(n, 0), near(n, 0);
+  std::vector<std::uint8_t> thin(n, 0);
   for (std::size_t i = 0; i < n; ++i) {
     double sum = filled[i];
     for (std::size_t k = family.offsets[i]; k < family.offsets[i + 1]; ++k) {
@@ -54,14 +50,7 @@ std::vector<std::uint8_t> near_surface(const ModelDimension& d, const FibreKerne
     const auto count = static_cast<double>(family.offsets[i + 1] - family.offsets[i] + 1);
     thin[i] = !owns_energy[i] || sum / count < 0.9 ? 1 : 0;
   }
-  for (std::size_t i = 0; i < n; ++i) {
-    bool any = thin[i] != 0;
-    for (std::size_t k = family.offsets[i]; k < family.offsets[i + 1] && !any; ++k) {
-      any = thin[family.neighbour[k]] != 0;
-    }
-    near[i] = any ? 1 : 0;
-  }
-  return near;
+  return marked_or_next_to(family, thin);
 }
 
 /// The fibre model's linearised stiffness K = Bᵀ D B (dim unknowns per particle): per arm k of
@@ -139,11 +128,10 @@ struct Released {
   std::vector<std::array<double, 2>> energy;
 };
 
-template <class Factor>
 Released released_energy(int dim, const ParticleSet& particles, const FibreArms& arms,
                          const Eigen::SparseMatrix<double>& k,
                          const std::vector<Eigen::Index>& index, Eigen::Index unknowns,
-                         const Factor& factor) {
+                         const SparseCholesky& factor) {
   const std::size_t n = particles.size();
   Released out;
   out.released.assign(n, {0, 0});
@@ -251,11 +239,7 @@ FibreArms::RelaxedModuli relax_moduli(const ModelDimension& d, const FibreKernel
   }
   Eigen::SparseMatrix<double> kff(unknowns, unknowns);
   kff.setFromTriplets(free_terms.begin(), free_terms.end());
-#ifdef LIBPD_HAVE_SUITESPARSE
-  Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>> factor(kff);
-#else
-  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> factor(kff);
-#endif
+  const SparseCholesky factor(kff);
   if (factor.info() != Eigen::Success) {
     return out; // a free island without a held particle: nothing to measure against
   }
