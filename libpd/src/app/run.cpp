@@ -135,7 +135,8 @@ private:
                             "are raised to match",
                             100 * a.relaxed.bulk, 100 * a.relaxed.shear)
               : std::string("The relaxed moduli could not be measured (no particle away from a "
-                            "surface): the body is softer than its material")));
+                            "surface, or a free region with no held particle): the body is softer "
+                            "than its material")));
     }
   }
 

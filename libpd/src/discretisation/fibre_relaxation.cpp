@@ -1,19 +1,18 @@
 #include "fibre_relaxation.hpp"
 
 #include <algorithm>
-#include <numbers>
 
 namespace pd::fibre_detail {
 
 namespace {
 
 /// Whether each particle is near a free surface, for relax_moduli. A particle's filling is its
-/// kernel-weighted volume Σ_j V_j w_ij over a full horizon's, ∫ w dV = (S_N/h) ∫_0^α −f'(u)
-/// u^(N−1) du: about 0.5 on a straight edge or a crack face, 0.97 at the median of the Monte Carlo
-/// disks' interior, but only 0.77 at their 1st percentile, so one particle's filling misfires.
-/// Its mean over the particle and its neighbours does not: a particle whose mean is below 0.9, or
-/// that owns no energy, marks a surface, and it and every particle with an arm to it are near
-/// one, about a horizon deep. Measured window (the disks of elliptic-disk and the jittered plate of
+/// kernel-weighted volume Σ_j V_j w_ij over a full horizon's (FibreKernel::slope_volume): about
+/// 0.5 on a straight edge or a crack face, 0.97 at the median of the Monte Carlo disks' interior,
+/// but only 0.77 at their 1st percentile, so one particle's filling misfires. Its mean over the
+/// particle and its neighbours does not: a particle whose mean is below 0.9, or that owns no
+/// energy, marks a surface, and it and every particle with an arm to it are near one, about a
+/// horizon deep. Measured window (the disks of elliptic-disk and the jittered plate of
 /// point_cloud_test): at 0.8 some particles next to the edges stay free and their traction enters
 /// the relaxation (0.10 released instead of 0.07), at 0.95 interior particles are held and the
 /// relaxation is stiffened (the plate's corrected shear 1.4 % soft); 0.85 and 0.9 agree within
@@ -23,14 +22,8 @@ std::vector<std::uint8_t> near_surface(const ModelDimension& d, const FibreKerne
                                        const std::vector<double>& size,
                                        const std::vector<std::uint8_t>& owns_energy) {
   const int dim = d.dim;
-  constexpr int steps = 2000; // midpoint rule on a polynomial kernel: 1e-7, against 0.1 of margin
-  double moment = 0;
-  for (int s = 0; s < steps; ++s) {
-    const double u = (s + 0.5) * kernel.alpha / steps;
-    moment += -kernel.slope(dim, u) * std::pow(u, dim - 1) * kernel.alpha / steps;
-  }
-  const double sphere = dim == 2 ? 2 * std::numbers::pi : 4 * std::numbers::pi;
-  const double volume_unit = dim == 2 ? d.thickness : 1.0; // a 2D particle's volume is area × t
+  // A 2D particle's volume is its area times the thickness.
+  const double full_horizon = kernel.slope_volume(dim) * (dim == 2 ? d.thickness : 1.0);
   const std::size_t n = particles.size();
   std::vector<double> filled(n, 0.0);
   for (std::size_t i = 0; i < n; ++i) {
@@ -39,7 +32,7 @@ std::vector<std::uint8_t> near_surface(const ModelDimension& d, const FibreKerne
       weighted += particles.volume[family.neighbour[k]] *
                   kernel_weight(kernel, dim, 1.0 / family.inverse_length[k], size[i]);
     }
-    filled[i] = owns_energy[i] ? weighted / (volume_unit * sphere * moment / size[i]) : 0.0;
+    filled[i] = owns_energy[i] ? weighted * size[i] / full_horizon : 0.0;
   }
   std::vector<std::uint8_t> thin(n, 0);
   for (std::size_t i = 0; i < n; ++i) {
@@ -56,7 +49,7 @@ std::vector<std::uint8_t> near_surface(const ModelDimension& d, const FibreKerne
 /// The fibre model's linearised stiffness K = Bᵀ D B (dim unknowns per particle): per arm k of
 /// particle i the row of its strain ε_k = q·(u_j − u_i)/|ξ| with D = V_i G(N+2) A_k |ξ_k|, per
 /// particle the row of its mean strain ε̄_i = (1/N) Σ_k A_k |ξ_k| ε_k (eq. 73) with
-/// D = V_i N (NK − G(N+2)): the Hessian of the energy in this header's comment.
+/// D = V_i N (NK − G(N+2)): the Hessian of the energy in fibre_arms.hpp's header comment.
 Eigen::SparseMatrix<double> fibre_stiffness(int dim, const ParticleSet& particles,
                                             const BondFamily& family, const FibreArms& arms) {
   const std::size_t n = particles.size();
@@ -112,9 +105,7 @@ std::vector<std::array<std::array<double, 3>, 3>> strain_modes(int dim) {
       normal[ua][ua] = 1;
       normal[ub][ub] = -1;
       shear[ua][ub] = shear[ub][ua] = 1;
-      if (dim == 3 || modes.size() == 1) {
-        modes.push_back(normal);
-      }
+      modes.push_back(normal);
       modes.push_back(shear);
     }
   }

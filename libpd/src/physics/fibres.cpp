@@ -41,6 +41,11 @@ double FibreKernel::slope(int dim, double u) const {
   return -2.0 * exponent * u / (alpha * alpha) * std::pow(t, exponent - 1) / normalisation(dim);
 }
 
+double FibreKernel::slope_volume(int dim) const {
+  return 2.0 * (dim - 1) * std::numbers::pi * (dim - 1) * std::pow(alpha, dim - 1) *
+         radial_integral(dim - 1, exponent) / normalisation(dim);
+}
+
 FibreModuli fibre_moduli(const ModelDimension& d, double youngs_modulus, double poisson_ratio) {
   const double E = youngs_modulus, nu = poisson_ratio;
   const bool plane_stress = d.dim == 2 && d.plane == PlaneMode::plane_stress;

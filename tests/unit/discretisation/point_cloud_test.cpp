@@ -251,15 +251,6 @@ TEST(FibrePatchTest, ArmForcesConserveMomentumOnGradedParticles) {
 
 namespace {
 
-/// The fraction of the continuum's energy that the free particles of a graded plate keep under
-/// the homogeneous strain `eps` (2 × 2) once they relax: the particles within 1.5 horizons of an
-/// edge are held on the homogeneous field, the rest move to equilibrium (conjugate gradients on
-/// the model's own forces, which are linear at this strain), and
-///   kept = (Σ_free W_i(affine) − ½ F·w) / Σ_free V_i w(eps),
-/// W_i the particle's energy from its arms (the energy of fibre_arms.hpp's header), F = V b the
-/// free particles' forces in the homogeneous field, w their relaxation, w(eps) the plane-strain
-/// continuum's energy density. Independent of fibre_arms.cpp's own relaxation: another held set,
-/// another solver, the forces of the kernel.
 /// The plate [0, 1] × [0, 0.5] as a square grid of spacing 1/`columns`, every point jittered by
 /// up to ±`jitter` spacings, volume s²: one spacing everywhere, so that a band of a few horizons
 /// along the edges leaves most of the plate free to relax.
@@ -280,6 +271,15 @@ pd::ParticleSet jittered_plate(int columns, double jitter, std::uint64_t seed) {
   return ps;
 }
 
+/// The fraction of the continuum's energy that the free particles of a plate keep under
+/// the homogeneous strain `eps` (2 × 2) once they relax: the particles within 1.5 horizons of an
+/// edge are held on the homogeneous field, the rest move to equilibrium (conjugate gradients on
+/// the model's own forces, which are linear at this strain), and
+///   kept = (Σ_free W_i(affine) − ½ F·w) / Σ_free V_i w(eps),
+/// W_i the particle's energy from its arms (the energy of fibre_arms.hpp's header), F = V b the
+/// free particles' forces in the homogeneous field, w their relaxation, w(eps) the plane-strain
+/// continuum's energy density. Independent of fibre_relaxation.cpp's own relaxation: another held
+/// set, another solver, the forces of the kernel.
 double relaxed_energy_kept(pd::Model& m, const std::array<double, 3>& eps) {
   const double e = 1e-6;
   const std::size_t n = m.size();

@@ -34,6 +34,10 @@ TEST(FibreKernel, IntegratesToOneInEveryDimensionAndExponent) {
       EXPECT_NEAR(radial(dim, kernel.alpha, [&](double u) { return -kernel.slope(dim, u) * u; }),
                   dim, 1e-8)
           << "dim " << dim << " k " << k;
+      EXPECT_NEAR(radial(dim, kernel.alpha, [&](double u) { return -kernel.slope(dim, u); }) /
+                      kernel.slope_volume(dim),
+                  1.0, 1e-8)
+          << "dim " << dim << " k " << k;
     }
   }
 }

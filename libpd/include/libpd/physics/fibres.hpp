@@ -50,6 +50,10 @@ struct FibreKernel {
   double value(int dim, double u) const;
   /// f'(u) = df/du (eq. 56), ≤ 0 on [0, α].
   double slope(int dim, double u) const;
+  /// ∫ −f'(u) 2(N−1)π u^(N−1) du over [0, α]: a particle of size h whose horizon the body fills
+  /// has the kernel-weighted volume Σ_j V_j w_j (eq. 57's weights) of this over h. By parts it is
+  /// (N−1) ∫ f(u) 2(N−1)π u^(N−2) du.
+  double slope_volume(int dim) const;
 };
 
 /// The two elastic constants of eq. 77 for a material in a setting: S = shear·ε_ab + bulk·ε̄.
