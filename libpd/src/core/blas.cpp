@@ -2,6 +2,9 @@
 
 #include <cstdlib>
 #include <dlfcn.h>
+#ifdef _OPENMP
+#include <omp.h>
+#endif
 #include <strings.h>
 #include <unistd.h>
 
@@ -40,6 +43,45 @@ void restart_with_this_cpus_blas_kernels(char** argv) {
     return;
   }
   execv("/proc/self/exe", argv);
+}
+
+namespace {
+
+// OpenBLAS's own thread count, looked up at run time as openblas_core is (the pthread build
+// does not follow OpenMP's).
+using GetThreads = int (*)();
+using SetThreads = void (*)(int);
+
+GetThreads openblas_get_threads() {
+  return reinterpret_cast<GetThreads>(dlsym(RTLD_DEFAULT, "openblas_get_num_threads"));
+}
+
+SetThreads openblas_set_threads() {
+  return reinterpret_cast<SetThreads>(dlsym(RTLD_DEFAULT, "openblas_set_num_threads"));
+}
+
+} // namespace
+
+SerialBlas::SerialBlas() {
+#ifdef _OPENMP
+  openmp_threads_ = omp_get_max_threads();
+  omp_set_num_threads(1);
+#endif
+  const GetThreads get = openblas_get_threads();
+  const SetThreads set = openblas_set_threads();
+  if (get != nullptr && set != nullptr) {
+    openblas_threads_ = get();
+    set(1);
+  }
+}
+
+SerialBlas::~SerialBlas() {
+  if (const SetThreads set = openblas_set_threads(); set != nullptr && openblas_threads_ > 0) {
+    set(openblas_threads_);
+  }
+#ifdef _OPENMP
+  omp_set_num_threads(openmp_threads_);
+#endif
 }
 
 } // namespace pd

@@ -1,6 +1,7 @@
 #include "libpd/discretisation/fibre_arms.hpp"
 
 #include "fibre_relaxation.hpp"
+#include "libpd/core/blas.hpp"
 #include "libpd/discretisation/point_cloud.hpp"
 
 #include <Eigen/Dense>
@@ -482,6 +483,9 @@ FibreArms fibre_arms(const CorrectionSpec& spec, const FibreKernel& kernel,
     }
   }
   if (particle_factor) {
+    // The balance and the relaxation factor sparse matrices: on one BLAS thread their results do
+    // not depend on the thread count (core/blas.hpp).
+    const SerialBlas serial_blas;
     const auto interior = full_horizons(dim, particles, family, owns_energy, arms.own);
     const Balance b = balance_arms(dim, particles, family, interior, arms.own);
     arms.balanced = b.interior;

@@ -1,5 +1,5 @@
 // Which BLAS kernels the sparse factorisation runs on (time/sparse_factorisation.cpp: CHOLMOD's
-// supernodal Cholesky spends its time in dgemm, its solves in dgemv).
+// supernodal Cholesky spends its time in dgemm, its solves in dgemv), and on how many threads.
 #pragma once
 
 #include <string>
@@ -21,5 +21,25 @@ std::string openblas_core_for_this_cpu();
 /// loads, before main, so main calls this first. A value the user set is kept; where the exec
 /// fails, the program runs on as it is.
 void restart_with_this_cpus_blas_kernels(char** argv);
+
+/// Runs the BLAS on one thread while it lives, and restores the thread counts after. CHOLMOD's
+/// supernodal factorisation splits its dense blocks over the BLAS's threads, and Debian's
+/// OpenBLAS (the OpenMP build) takes as many as `--threads` gives OpenMP, so the factor's last
+/// bits, and everything a set-up derives from it, depended on the thread count: the virtual-fibre
+/// disks of elliptic-disk and elliptic-disk-regular differed at 4e-6 and the Griffith failure
+/// stresses by up to 7 % between 1 and 2 threads. The fibre arms' balance and relaxation
+/// (discretisation/fibre_arms.cpp, fibre_relaxation.cpp) factor once per set-up, so they hold
+/// one of these.
+class SerialBlas {
+public:
+  SerialBlas();
+  ~SerialBlas();
+  SerialBlas(const SerialBlas&) = delete;
+  SerialBlas& operator=(const SerialBlas&) = delete;
+
+private:
+  int openmp_threads_ = 0;
+  int openblas_threads_ = 0;
+};
 
 } // namespace pd
