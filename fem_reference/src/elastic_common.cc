@@ -3,6 +3,7 @@
 #include <Epetra_CrsMatrix.h>
 #include <Epetra_MultiVector.h>
 #include <Teuchos_ParameterList.hpp>
+#include <libpd/time/sparse_cholesky.hpp>
 #include <algorithm>
 #include <chrono>
 #include <deal.II/dofs/dof_tools.h>
@@ -11,7 +12,6 @@
 #include <deal.II/lac/solver_control.h>
 #include <deal.II/lac/trilinos_precondition.h>
 #include <memory>
-#include <time/sparse_factorisation.hpp> // libpd's CHOLMOD wrapper (libpd/src, Eigen inside)
 #include <vector>
 
 namespace pdfem {
@@ -76,12 +76,12 @@ void initialize_amg(const DoFHandler<dim>& dof_handler,
   amg.initialize(system_matrix, parameter_list);
 }
 
-// The lower triangle of the assembled stiffness as Eigen's compressed matrix (all that a
-// symmetric factorisation reads). Read through Epetra's row views: deal.II's matrix iterators
-// copy each row, which took longer than the factorisation.
-Eigen::SparseMatrix<double> lower_triangle(const TrilinosWrappers::SparseMatrix& matrix) {
+// The lower triangle of the assembled stiffness (all that a symmetric factorisation reads). Read
+// through Epetra's row views: deal.II's matrix iterators copy each row, which took longer than the
+// factorisation.
+std::vector<pd::LowerEntry> lower_triangle(const TrilinosWrappers::SparseMatrix& matrix) {
   const Epetra_CrsMatrix& crs = matrix.trilinos_matrix();
-  std::vector<Eigen::Triplet<double>> entries;
+  std::vector<pd::LowerEntry> entries;
   entries.reserve(static_cast<std::size_t>(crs.NumMyNonzeros() / 2 + crs.NumMyRows()));
   for (int row = 0; row < crs.NumMyRows(); ++row) {
     int n = 0;
@@ -91,28 +91,26 @@ Eigen::SparseMatrix<double> lower_triangle(const TrilinosWrappers::SparseMatrix&
     for (int k = 0; k < n; ++k) {
       const int column = crs.GCID(columns[k]); // serial: global = local row index
       if (column <= row)
-        entries.emplace_back(row, column, values[k]);
+        entries.push_back({static_cast<std::size_t>(row), static_cast<std::size_t>(column),
+                           values[k]});
     }
   }
-  Eigen::SparseMatrix<double> lower(crs.NumMyRows(), crs.NumMyRows());
-  lower.setFromTriplets(entries.begin(), entries.end());
-  return lower;
+  return entries;
 }
 
 // x = K⁻¹ b by libpd's sparse Cholesky; false (and x untouched) if K is not positive definite.
 bool solve_direct(const TrilinosWrappers::SparseMatrix& system_matrix,
                   const TrilinosWrappers::MPI::Vector& system_rhs,
                   TrilinosWrappers::MPI::Vector& x, CgStatistics& stats) {
-  std::unique_ptr<pd::SparseFactorisation> factor;
+  const auto n = static_cast<std::size_t>(system_rhs.locally_owned_size());
+  std::unique_ptr<pd::SparseCholesky> factor;
   try {
-    factor = pd::factorise(lower_triangle(system_matrix), true);
+    factor = std::make_unique<pd::SparseCholesky>(n, lower_triangle(system_matrix));
   } catch (const std::runtime_error&) {
     return false;
   }
-  const auto n = static_cast<Eigen::Index>(system_rhs.locally_owned_size());
-  const Eigen::VectorXd solution =
-      factor->solve(Eigen::Map<const Eigen::VectorXd>(system_rhs.begin(), n));
-  std::copy(solution.data(), solution.data() + n, x.begin());
+  const std::vector<double> solution = factor->solve({system_rhs.begin(), n});
+  std::copy(solution.begin(), solution.end(), x.begin());
   stats.solver = factor->name();
   stats.factor_bytes = factor->factor_bytes();
   return true;
