@@ -36,8 +36,12 @@ std::vector<double> SparseCholesky::solve(std::span<const double> b) const {
   return {x.data(), x.data() + x.size()};
 }
 
-std::string SparseCholesky::name() const { return factor_->name(); }
+std::string SparseCholesky::name() const {
+  return factor_->name();
+}
 
-std::size_t SparseCholesky::factor_bytes() const { return factor_->factor_bytes(); }
+std::size_t SparseCholesky::factor_bytes() const {
+  return factor_->factor_bytes();
+}
 
 } // namespace pd
