@@ -408,6 +408,17 @@ void SceneReference<dim>::output_results(const double wall_time) const {
     w.value("scene", problem.path);
     w.value("dimension", dim);
     w.value("model", problem.model_name());
+    // The constants this solve used, as libpd resolved them from the scene: `pd verify` checks
+    // them against the PD run's, so a verdict never compares two materials.
+    w.begin_array("materials");
+    for (const pd::Material& m : problem.materials) {
+      w.begin_object();
+      w.value("name", m.name);
+      w.value("youngs_modulus", m.youngs_modulus * m.stiffness_factor);
+      w.value("poisson_ratio", m.poisson_ratio);
+      w.end_object();
+    }
+    w.end_array();
     w.value("wall_time_s", wall_time);
     w.begin_array("levels");
     for (const SceneLevel& l : levels) {

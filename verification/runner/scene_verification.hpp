@@ -14,13 +14,19 @@ namespace pd::verification {
 struct SceneVerifyOptions {
   std::optional<int> fe_levels; ///< pd-fem --levels; default: its own
   bool fe_coarse = false;       ///< pd-fem --coarse
-  std::optional<double> gate;   ///< fail if |PD − FE| / |FE| exceeds this for a probe
+  /// Fail if a probe's |PD − FE| exceeds this fraction of max(|FE|, a tenth of the largest |FE|
+  /// of its quantity); without it the result is measured, not passed.
+  std::optional<double> gate;
   std::filesystem::path pd_fem; ///< the pd-fem executable; empty: beside this program, or $PD_FEM
 };
 
 /// Run the scene and its FE reference; the JSON has one row per probe (PD, FE, the FE's own error
-/// estimate, the difference) and the wall time of both. "passed": both ran, every probe has an
-/// FE value, and the gate (if any) holds.
+/// estimate, the difference and, with a gate, the probe's tolerance), the materials both solved
+/// and the wall time of both. "verdict": `passed` (a gate was given and every probe is within
+/// it), `failed` (a probe is outside the gate, a probe has no FE value, the two solvers' materials
+/// differ, or the PD run did not end at an equilibrium: "reasons" says which) or `measured` (no
+/// gate: the differences are reported, not judged). Throws if the scene gives a ν that the bond
+/// model cannot represent (PD and FE would solve different problems).
 Json verify_scene(const std::filesystem::path& scene, const Context& ctx,
                   const SceneVerifyOptions& options);
 

@@ -29,6 +29,18 @@ Json run_summary(const Scene& scene, const Simulation& sim, const RunOutcome& ou
     j["message"] = out.result.message;
   }
   j["dimension"] = scene.model.dimension.dim;
+  // The constants as the scene resolved them (a bond-based ν the model fixes included), so that
+  // a reference solution can be checked against the same material.
+  Json& materials = j["materials"];
+  materials = Json::array();
+  for (const Material& m : scene.model.materials) {
+    Json row;
+    row["name"] = m.name;
+    row["youngs_modulus"] = m.youngs_modulus * m.stiffness_factor;
+    row["poisson_ratio"] = m.poisson_ratio;
+    row["density"] = m.density;
+    materials.push_back(row);
+  }
   j["particles"] = out.particles;
   j["bonds"] = out.bonds;
   j["bonds_per_particle"] =

@@ -39,6 +39,13 @@ std::optional<bool> Json::boolean() const {
   return std::nullopt;
 }
 
+std::optional<std::string> Json::text() const {
+  if (const std::string* t = std::get_if<std::string>(&value_)) {
+    return *t;
+  }
+  return std::nullopt;
+}
+
 std::optional<double> Json::number() const {
   if (const double* d = std::get_if<double>(&value_)) {
     return *d;

@@ -36,6 +36,25 @@ TEST(SceneParser, MinimalSceneParses) {
   EXPECT_TRUE(s.warnings.empty());
 }
 
+// A bond-based material without ν takes the one the model represents (1/3 in plane stress,
+// 1/4 in plane strain and 3D), so that an FE solution of the same scene solves the same
+// material; the virtual-fibre model honours ν and keeps the material's own default.
+TEST(SceneParser, BondBasedMaterialWithoutPoissonRatioTakesTheRepresentedOne) {
+  auto with = [](const std::string& dims, const std::string& model) {
+    std::string text = std::string(minimal);
+    text.replace(text.find("dimension: 1\n"), 13, dims);
+    text.replace(text.find("box: [[0], [1]]"), 15, "box: [[0, 0, 0], [1, 1, 1]]");
+    const std::string full = text + model;
+    return pd::parse_scene(yaml(full.c_str()), "s.yaml").model.materials.at(0).poisson_ratio;
+  };
+  EXPECT_DOUBLE_EQ(with("dimension: 2\nplane: stress\nthickness: 0.1\n", ""), 1.0 / 3.0);
+  EXPECT_DOUBLE_EQ(with("dimension: 2\nplane: strain\nthickness: 0.1\n", ""), 0.25);
+  EXPECT_DOUBLE_EQ(with("dimension: 3\n", ""), 0.25);
+  EXPECT_DOUBLE_EQ(with("dimension: 2\nplane: stress\nthickness: 0.1\n",
+                        "model:\n  bond_model: virtual-fibres\n"),
+                   pd::Material{}.poisson_ratio);
+}
+
 // ---- Syntax and structure ---------------------------------------------------------------------
 
 TEST(SceneParser, MalformedYamlUnclosedBracket) {

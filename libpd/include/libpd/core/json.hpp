@@ -61,6 +61,7 @@ public:
   /// The value as bool / number, or nullopt for other types.
   std::optional<bool> boolean() const;
   std::optional<double> number() const;
+  std::optional<std::string> text() const;
 
   /// Pretty-printed text. Non-finite numbers become null.
   std::string dump(int indent = 2) const;

@@ -19,8 +19,9 @@ constexpr Key material_keys[] = {
     {.name = "poisson_ratio",
      .type = Type::number,
      .doc = "ν as measured; bond-based PD fixes ν (1/4 in 3D and plane strain, 1/3 in plane "
-            "stress), other values only cause a warning; model.bond_model: virtual-fibres "
-            "honours it",
+            "stress) and takes that value when none is given, other values only cause a "
+            "warning (and `pd verify` refuses them: PD and FE would solve different "
+            "problems); model.bond_model: virtual-fibres honours it",
      .range = {-1, 0.5, true, true},
      .range_hint = "a stable isotropic material has -1 < ν < 0.5",
      .bind = field_with_default<&Material::poisson_ratio>()},
@@ -125,9 +126,15 @@ void read_materials(Reader& r, ModelSpec& model, Marks& marks) {
     Material mat;
     mat.name = key.Scalar();
     r.read_bound(f, mat);
-    // The fibre model honours ν (physics/fibres.hpp); bond-based PD cannot.
-    if (f.has("poisson_ratio") && model.effects.bond_model == BondModel::micro_elastic) {
-      warn_unrepresented_poisson_ratio(r, f, model.dimension, mat.poisson_ratio);
+    // The fibre model honours ν (physics/fibres.hpp); bond-based PD cannot. A bond-based
+    // material without ν takes the one the model represents, so that every solver reading the
+    // scene (PD, and pd-fem --scene for `pd verify`) solves the same problem.
+    if (model.effects.bond_model == BondModel::micro_elastic) {
+      if (f.has("poisson_ratio")) {
+        warn_unrepresented_poisson_ratio(r, f, model.dimension, mat.poisson_ratio);
+      } else if (const auto represented = bond_based_poisson_ratio(model.dimension)) {
+        mat.poisson_ratio = *represented;
+      }
     }
     model.materials.push_back(std::move(mat));
     marks.material_nodes.push_back(key);
