@@ -135,6 +135,60 @@ def write_json(p: Path, obj: object) -> None:
     os.replace(tmp, p)
 
 
+def cached_records(cache: Path, stages: list[S.Stage], keys: dict[str, str],
+                   force: list[str]) -> dict[str, dict]:
+    """The stored records still valid: same key, status ok, and not forced to rerun."""
+    cached: dict[str, dict] = {}
+    for st in stages:
+        c = load_json(cache / f"{st.file_name}.json", None)
+        if (isinstance(c, dict) and c.get("key") == keys[st.name] and c.get("status") == "ok"
+                and not any(fnmatch.fnmatch(st.name, f) for f in force)):
+            cached[st.name] = c
+    return cached
+
+
+def execute_stage(ctx: S.Ctx, st: S.Stage, key: str) -> dict:
+    """Runs one stage; its record, with the error of a stage that failed."""
+    t0 = time.time()
+    S.cpu_account_reset()
+    rec = {"name": st.name, "group": st.group, "title": st.title, "key": key,
+           "commands": st.commands, "cached": False,
+           "threads": int(st.env.get("OMP_NUM_THREADS", os.cpu_count() or 1)),
+           "loadavg_at_start": os.getloadavg()[0]}
+    try:
+        rec["result"] = st.fn(ctx, st)
+        rec["status"] = "ok"
+        rec["error"] = None
+    except S.StageFailed as e:
+        rec["status"], rec["error"], rec["result"] = "failed", str(e), None
+    except Exception as e:  # a bug in the stage code: still show it, never hide it
+        rec["status"], rec["result"] = "failed", None
+        rec["error"] = f"{type(e).__name__}: {e}\n{traceback.format_exc(limit=4)}"
+    rec["seconds"] = time.time() - t0
+    rec["cpu_seconds"] = S.cpu_account()
+    return rec
+
+
+def next_batch(stages: list[S.Stage], i: int, jobs: int) -> list[S.Stage]:
+    """Stage i and, if it may share the machine and jobs > 1, the parallel stages after it."""
+    batch = [stages[i]]
+    if stages[i].parallel and jobs > 1:
+        while i + len(batch) < len(stages) and stages[i + len(batch)].parallel:
+            batch.append(stages[i + len(batch)])
+    return batch
+
+
+def keep_stage_order(stages: list[S.Stage], records: dict[str, dict]) -> None:
+    """Reorders records in place: the stage order of the list, not the completion order."""
+    order = [st.name for st in stages]
+    ordered = {n: records[n] for n in order if n in records}
+    for n in list(records):
+        if n not in ordered:
+            ordered[n] = records[n]
+    records.clear()
+    records.update(ordered)
+
+
 def run_stages(ctx: S.Ctx, stages: list[S.Stage], records: dict[str, dict], force: list[str],
                jobs: int) -> list[S.Stage]:
     """Runs (or takes from the cache) every stage; returns the stages it ran, in the order it
@@ -145,12 +199,7 @@ def run_stages(ctx: S.Ctx, stages: list[S.Stage], records: dict[str, dict], forc
     data.mkdir(parents=True, exist_ok=True)
     durations: dict[str, float] = load_json(cache / "durations.json", {})  # type: ignore[assignment]
     keys = {st.name: S.stage_key(ctx, st) for st in stages}
-    cached: dict[str, dict] = {}
-    for st in stages:
-        c = load_json(cache / f"{st.file_name}.json", None)
-        if (isinstance(c, dict) and c.get("key") == keys[st.name] and c.get("status") == "ok"
-                and not any(fnmatch.fnmatch(st.name, f) for f in force)):
-            cached[st.name] = c
+    cached = cached_records(cache, stages, keys, force)
     estimate = {st.name: 0.0 if st.name in cached else durations.get(st.name, st.default_seconds)
                 for st in stages}
     total_est = sum(estimate.values())
@@ -162,24 +211,7 @@ def run_stages(ctx: S.Ctx, stages: list[S.Stage], records: dict[str, dict], forc
     submitted: list[S.Stage] = []
 
     def execute(st: S.Stage) -> dict:
-        t0 = time.time()
-        S.cpu_account_reset()
-        rec = {"name": st.name, "group": st.group, "title": st.title, "key": keys[st.name],
-               "commands": st.commands, "cached": False,
-               "threads": int(st.env.get("OMP_NUM_THREADS", os.cpu_count() or 1)),
-               "loadavg_at_start": os.getloadavg()[0]}
-        try:
-            rec["result"] = st.fn(ctx, st)
-            rec["status"] = "ok"
-            rec["error"] = None
-        except S.StageFailed as e:
-            rec["status"], rec["error"], rec["result"] = "failed", str(e), None
-        except Exception as e:  # a bug in the stage code: still show it, never hide it
-            rec["status"], rec["result"] = "failed", None
-            rec["error"] = f"{type(e).__name__}: {e}\n{traceback.format_exc(limit=4)}"
-        rec["seconds"] = time.time() - t0
-        rec["cpu_seconds"] = S.cpu_account()
-        return rec
+        return execute_stage(ctx, st, keys[st.name])
 
     def finish(i: int, st: S.Stage, rec: dict) -> None:
         nonlocal done_est
@@ -203,10 +235,7 @@ def run_stages(ctx: S.Ctx, stages: list[S.Stage], records: dict[str, dict], forc
     # OMP_NUM_THREADS = cores / jobs; everything else (FE, benchmarks, ...) runs alone.
     i = 0
     while i < len(stages):
-        batch = [stages[i]]
-        if stages[i].parallel and jobs > 1:
-            while i + len(batch) < len(stages) and stages[i + len(batch)].parallel:
-                batch.append(stages[i + len(batch)])
+        batch = next_batch(stages, i, jobs)
         for k, st in enumerate(batch):
             if st.name in cached:
                 rec = dict(cached[st.name])
@@ -237,14 +266,7 @@ def run_stages(ctx: S.Ctx, stages: list[S.Stage], records: dict[str, dict], forc
                     n, st = futs[f]
                     finish(n, st, f.result())
         i += len(batch)
-    # keep the stage order of the list, not the completion order
-    order = [st.name for st in stages]
-    ordered = {n: records[n] for n in order if n in records}
-    for n in list(records):
-        if n not in ordered:
-            ordered[n] = records[n]
-    records.clear()
-    records.update(ordered)
+    keep_stage_order(stages, records)
     return submitted
 
 
@@ -265,7 +287,7 @@ def load_records(data: Path) -> tuple[dict[str, dict], dict, dict]:
     return records, env, meta  # type: ignore[return-value]
 
 
-def main(argv: list[str] | None = None) -> int:
+def argument_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("-o", "--output", default="out/report", help="report directory (default out/report)")
     ap.add_argument("--full", action="store_true", help="complete sweeps, full FE runs, more stability scenes (≤ 60 min)")
@@ -281,6 +303,28 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("-j", "--jobs", type=int, default=os.cpu_count() or 1,
                     help="verification cases run this many at a time (default: cores)")
     ap.add_argument("-v", "--verbose", action="store_true", help="print every command")
+    return ap
+
+
+def render_only(ap: argparse.ArgumentParser, a: argparse.Namespace, out: Path) -> int:
+    """--render-only: the page from stored stage records, without running a stage."""
+    from pdreport import render as R  # matplotlib only needed from here on
+
+    data = Path(a.data) if a.data else out / "data"
+    if not data.is_dir():
+        ap.error(f"--render-only: {data} is not a folder of stage records")
+    records, env, meta = load_records(data)
+    if not records:
+        ap.error(f"--render-only: no stage records in {data}")
+    meta = dict(meta or {})
+    meta["rendered_from"] = str(data)
+    R.render(out, records, env, meta)
+    print(f"rendered {len(records)} stage records -> {out / 'index.html'}")
+    return 0
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argument_parser()
     a = ap.parse_args(argv)
 
     out = Path(a.output)
@@ -290,20 +334,9 @@ def main(argv: list[str] | None = None) -> int:
         new = a.compare[1] if len(a.compare) == 2 else str(out / "report.json")
         return cmp.main(a.compare[0], new)
 
-    from pdreport import render as R  # matplotlib only needed from here on
-
     if a.render_only:
-        data = Path(a.data) if a.data else out / "data"
-        if not data.is_dir():
-            ap.error(f"--render-only: {data} is not a folder of stage records")
-        records, env, meta = load_records(data)
-        if not records:
-            ap.error(f"--render-only: no stage records in {data}")
-        meta = dict(meta or {})
-        meta["rendered_from"] = str(data)
-        R.render(out, records, env, meta)
-        print(f"rendered {len(records)} stage records -> {out / 'index.html'}")
-        return 0
+        return render_only(ap, a, out)
+    from pdreport import render as R  # matplotlib only needed from here on
 
     build = Path(a.build_dir)
     if not build.is_absolute():

@@ -205,6 +205,52 @@ int run_scene(const Arguments& args) {
               (options.output_directory / "fe.json").string().c_str());
   return 0;
 }
+// pd-fem PARAMETER_FILE: the reference solution of a parameter file, with --check against a
+// stored one (2 if it fails).
+int run_parameter_file(const Arguments& args, const std::string& command_line) {
+  using namespace dealii;
+  ParameterHandler prm;
+  pdfem::Parameters::declare(prm);
+  // Throws with the file name and line number on any bad entry.
+  prm.parse_input(args.prm_file);
+  pdfem::Parameters parameters;
+  parameters.parse(prm);
+
+  unsigned int n_levels = args.coarse ? parameters.n_coarse_levels : parameters.n_levels;
+  if (args.levels > 0)
+    n_levels = static_cast<unsigned int>(args.levels);
+  const std::filesystem::path out_dir =
+      args.output_dir.empty() ? std::filesystem::path("fem_reference") / "out" / parameters.name
+                              : std::filesystem::path(args.output_dir);
+
+  std::ostringstream prm_json, prm_text;
+  prm.print_parameters(prm_json, ParameterHandler::ShortJSON);
+  prm.print_parameters(prm_text, ParameterHandler::ShortPRM);
+
+  const pdfem::RunSummary summary = pdfem::solve_reference(
+      parameters, n_levels, out_dir, command_line, prm_json.str(), prm_text.str());
+
+  for (const auto& q : summary.quantities) {
+    std::printf("%s: %-14s deflection %.8e m (finest), extrapolated "
+                "%.8e m, observed order %s, estimated error %s\n",
+                parameters.name.c_str(), q.name.c_str(), q.finest, q.richardson.extrapolated,
+                q.richardson.order ? std::to_string(*q.richardson.order).c_str() : "n/a",
+                q.richardson.valid
+                    ? (std::to_string(100. * q.richardson.relative_error) + " %").c_str()
+                    : "n/a (needs 3 levels in the asymptotic range)");
+  }
+  std::printf("%s: wall time %.2f s; output in %s\n", parameters.name.c_str(), summary.wall_time,
+              out_dir.string().c_str());
+
+  if (!args.check_file.empty()) {
+    if (!check_against_reference(summary, args.check_file)) {
+      std::fprintf(stderr, "pd-fem: check against %s FAILED\n", args.check_file.c_str());
+      return 2;
+    }
+    std::printf("check against %s passed\n", args.check_file.c_str());
+  }
+  return 0;
+}
 } // namespace
 
 int main(int argc, char** argv) {
@@ -270,46 +316,7 @@ int main(int argc, char** argv) {
     if (args.prm_file.empty())
       throw std::runtime_error(std::string("no parameter file given\n") + usage_text);
 
-    ParameterHandler prm;
-    pdfem::Parameters::declare(prm);
-    // Throws with the file name and line number on any bad entry.
-    prm.parse_input(args.prm_file);
-    pdfem::Parameters parameters;
-    parameters.parse(prm);
-
-    unsigned int n_levels = args.coarse ? parameters.n_coarse_levels : parameters.n_levels;
-    if (args.levels > 0)
-      n_levels = static_cast<unsigned int>(args.levels);
-    const std::filesystem::path out_dir =
-        args.output_dir.empty() ? std::filesystem::path("fem_reference") / "out" / parameters.name
-                                : std::filesystem::path(args.output_dir);
-
-    std::ostringstream prm_json, prm_text;
-    prm.print_parameters(prm_json, ParameterHandler::ShortJSON);
-    prm.print_parameters(prm_text, ParameterHandler::ShortPRM);
-
-    const pdfem::RunSummary summary = pdfem::solve_reference(
-        parameters, n_levels, out_dir, command_line, prm_json.str(), prm_text.str());
-
-    for (const auto& q : summary.quantities) {
-      std::printf("%s: %-14s deflection %.8e m (finest), extrapolated "
-                  "%.8e m, observed order %s, estimated error %s\n",
-                  parameters.name.c_str(), q.name.c_str(), q.finest, q.richardson.extrapolated,
-                  q.richardson.order ? std::to_string(*q.richardson.order).c_str() : "n/a",
-                  q.richardson.valid
-                      ? (std::to_string(100. * q.richardson.relative_error) + " %").c_str()
-                      : "n/a (needs 3 levels in the asymptotic range)");
-    }
-    std::printf("%s: wall time %.2f s; output in %s\n", parameters.name.c_str(), summary.wall_time,
-                out_dir.string().c_str());
-
-    if (!args.check_file.empty()) {
-      if (!check_against_reference(summary, args.check_file)) {
-        std::fprintf(stderr, "pd-fem: check against %s FAILED\n", args.check_file.c_str());
-        return 2;
-      }
-      std::printf("check against %s passed\n", args.check_file.c_str());
-    }
+    return run_parameter_file(args, command_line);
   } catch (const pd::SceneError& e) {
     // Already "FILE:LINE:COLUMN: error: WHAT" with a hint.
     std::cerr << e.what() << std::endl;

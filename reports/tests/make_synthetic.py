@@ -165,13 +165,10 @@ def tool_records() -> list[dict]:
     return out
 
 
-def main(out: Path) -> int:
-    data = out / "data"
-    data.mkdir(parents=True, exist_ok=True)
-    for f in data.glob("*.json"):
-        f.unlink()
+def fe_records() -> tuple[list[dict], dict[str, dict]]:
+    """FE references: the real gold files (they are data in the repository, not a run); their
+    stage records and the gold files by problem."""
     records = []
-    # FE references: the real gold files (they are data in the repository, not a run).
     ref = ROOT / "fem_reference" / "reference"
     golds = {}
     for p, csvs in (("clamped-beam", ["clamped-beam-centreline.csv"]),
@@ -187,6 +184,30 @@ def main(out: Path) -> int:
         records.append(rec(f"fem:{p}", "fem", {"problem": p, "mode": "synthetic", "check_passed": True,
                                                 "quantities": g["quantities"], "theory": g["theory"],
                                                 "lines": lines}))
+    return records, golds
+
+
+def plate_rows() -> tuple[list[list[float]], list[list[float]]]:
+    """The plate's lines (position, PD, FE): perpendicular to the free edge and along it."""
+    prow = []
+    for i in range(60):
+        y = 3.0 * (i + 0.5) / 60
+        fe = 2.64e-4 * (y / 3) ** 2 * (3 - y / 3 * 1.4)
+        prow.append([y, fe * 1.03, fe])
+    erow = []
+    for i in range(80):
+        x = 4.0 * (i + 0.5) / 80
+        fe = 2.64e-4 * 16 * (x / 4) ** 2 * (1 - x / 4) ** 2
+        erow.append([x, fe * 1.03, fe])
+    return prow, erow
+
+
+def main(out: Path) -> int:
+    data = out / "data"
+    data.mkdir(parents=True, exist_ok=True)
+    for f in data.glob("*.json"):
+        f.unlink()
+    records, golds = fe_records()
     t = {k: golds["clamped-beam"]["theory"][k] for k in ("euler_bernoulli", "timoshenko")}
     verify = [
         ("bond-count", {"case": "bond-count", "quantity": "particles and bonds", "passed": True,
@@ -212,16 +233,7 @@ def main(out: Path) -> int:
                                  {"tip": {k: golds["cantilever"]["theory"][k] for k in ("euler_bernoulli", "timoshenko")}},
                                  False)),
     ]
-    prow = []
-    for i in range(60):
-        y = 3.0 * (i + 0.5) / 60
-        fe = 2.64e-4 * (y / 3) ** 2 * (3 - y / 3 * 1.4)
-        prow.append([y, fe * 1.03, fe])
-    erow = []
-    for i in range(80):
-        x = 4.0 * (i + 0.5) / 80
-        fe = 2.64e-4 * 16 * (x / 4) ** 2 * (1 - x / 4) ** 2
-        erow.append([x, fe * 1.03, fe])
+    prow, erow = plate_rows()
     kq = golds["plate-3clamped"]["theory"]["quantities"]
     verify.append(("plate-3clamped", structure(
         "plate-3clamped", {"free_edge_middle": (2.643e-4, 2.72e-4), "centre": (1.418e-4, 1.46e-4)},

@@ -104,6 +104,46 @@ def damage_mean(vtu):
     return sum(values) / len(values)
 
 
+def compare_outputs(a, b, fa, resumed):
+    """Every file of the uninterrupted run (folder a) equals the restarted run's (folder b), up to
+    the summary's volatile fields and the interrupted run's last frame in the manifest."""
+    for f in fa:
+        pa, pb = os.path.join(a, f), os.path.join(b, f)
+        if f == "summary.json":
+            ja, jb = json.load(open(pa)), json.load(open(pb))
+            if jb.get("restarted_from", {}).get("step") != resumed:
+                fail(f"summary.json of the restart lacks restarted_from.step = {resumed}")
+            ja = {k: v for k, v in ja.items() if k not in VOLATILE}
+            jb = {k: v for k, v in jb.items() if k not in VOLATILE}
+            if ja != jb:
+                diff = {k: (ja.get(k), jb.get(k)) for k in set(ja) | set(jb)
+                        if ja.get(k) != jb.get(k)}
+                fail(f"summary.json differs: {diff}")
+        elif f == "manifest.txt":
+            # It lists every file in the folder, so also the interrupted run's last frame.
+            la = open(pa).read().splitlines()
+            lb = [l for l in open(pb).read().splitlines()
+                  if l in la or l != f"particles-{resumed:08d}.vtu"]
+            if la != lb:
+                fail(f"manifest.txt differs: {sorted(set(la) ^ set(lb))}")
+        elif open(pa, "rb").read() != open(pb, "rb").read():
+            fail(f"{f} differs between the uninterrupted and the restarted run")
+
+
+def check_damage_grows(a, fa, resumed):
+    """Fails unless bonds broke both before and after the restart step (run a's frames)."""
+    # The restart must have carried bond history and continued to break bonds after it.
+    frames = sorted(f for f in fa if f.startswith("particles-") and f.endswith(".vtu"))
+    step_of = lambda f: int(f[len("particles-"):-len(".vtu")])
+    before = [f for f in frames if step_of(f) <= resumed][-1]
+    d_before, d_end = damage_mean(os.path.join(a, before)), damage_mean(os.path.join(a, frames[-1]))
+    if not (0 < d_before < d_end):
+        fail(f"damage should grow across the restart: mean φ {d_before} at {before}, "
+             f"{d_end} at the end (change the scene so bonds break before and after step "
+             f"{resumed})")
+    print(f"mean damage {d_before:.5f} at {before}, {d_end:.5f} at the end")
+
+
 def main():
     if len(sys.argv) != 5:
         fail(__doc__)
@@ -168,39 +208,10 @@ def main():
         fb = [f for f in fb if f != f"particles-{resumed:08d}.vtu" or f in fa]
     if fa != fb:
         fail(f"different files:\n  uninterrupted {fa}\n  restarted     {fb}")
-    for f in fa:
-        pa, pb = os.path.join(a, f), os.path.join(b, f)
-        if f == "summary.json":
-            ja, jb = json.load(open(pa)), json.load(open(pb))
-            if jb.get("restarted_from", {}).get("step") != resumed:
-                fail(f"summary.json of the restart lacks restarted_from.step = {resumed}")
-            ja = {k: v for k, v in ja.items() if k not in VOLATILE}
-            jb = {k: v for k, v in jb.items() if k not in VOLATILE}
-            if ja != jb:
-                diff = {k: (ja.get(k), jb.get(k)) for k in set(ja) | set(jb)
-                        if ja.get(k) != jb.get(k)}
-                fail(f"summary.json differs: {diff}")
-        elif f == "manifest.txt":
-            # It lists every file in the folder, so also the interrupted run's last frame.
-            la = open(pa).read().splitlines()
-            lb = [l for l in open(pb).read().splitlines()
-                  if l in la or l != f"particles-{resumed:08d}.vtu"]
-            if la != lb:
-                fail(f"manifest.txt differs: {sorted(set(la) ^ set(lb))}")
-        elif open(pa, "rb").read() != open(pb, "rb").read():
-            fail(f"{f} differs between the uninterrupted and the restarted run")
+    compare_outputs(a, b, fa, resumed)
 
     if VARIANTS[variant]["damage"]:
-        # The restart must have carried bond history and continued to break bonds after it.
-        frames = sorted(f for f in fa if f.startswith("particles-") and f.endswith(".vtu"))
-        step_of = lambda f: int(f[len("particles-"):-len(".vtu")])
-        before = [f for f in frames if step_of(f) <= resumed][-1]
-        d_before, d_end = damage_mean(os.path.join(a, before)), damage_mean(os.path.join(a, frames[-1]))
-        if not (0 < d_before < d_end):
-            fail(f"damage should grow across the restart: mean φ {d_before} at {before}, "
-                 f"{d_end} at the end (change the scene so bonds break before and after step "
-                 f"{resumed})")
-        print(f"mean damage {d_before:.5f} at {before}, {d_end:.5f} at the end")
+        check_damage_grows(a, fa, resumed)
     print(f"{variant}: {steps} steps, {signal.Signals(sig).name} after step {kill_at}, "
           f"restarted at step {resumed}; "
           f"{len(fa)} files identical (uninterrupted run {t_a:.2f} s)")

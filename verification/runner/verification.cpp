@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <utility>
 
 #ifndef PD_SOURCE_SCENES_DIR
 #define PD_SOURCE_SCENES_DIR "verification/scenes"
@@ -62,10 +63,9 @@ std::vector<Case> with_user_structures(std::vector<Case> cases) {
   return cases;
 }
 
-} // namespace
-
-const std::vector<Case>& all_cases() {
-  static const std::vector<Case> cases = with_user_structures({
+/// The elastic cases: counts, the bar, the block and the structures against deal.II.
+std::vector<Case> elastic_cases() {
+  return {
       {"bond-count", "particle and bond counts of Miranda's Models A and B; bonds per particle",
        run_bond_count},
       {"bar-vibration",
@@ -123,6 +123,12 @@ const std::vector<Case>& all_cases() {
       {"clamped-beam-2d-sweep",
        "accuracy vs time: plane-strain clamped beam over spacing and knobs",
        run_clamped_beam_2d_sweep},
+  };
+}
+
+/// Fracture, quasi-brittle and virtual-fibre cases, after the elastic ones in the list.
+std::vector<Case> fracture_and_fibre_cases() {
+  return {
       {"rc-beam", "Miranda 5.2.1: RC beam to 20 mm mid-span displacement, damage, shear failure",
        run_rc_beam},
       {"compression-cube",
@@ -183,7 +189,19 @@ const std::vector<Case>& all_cases() {
        "griffith at Table 1's particle density (25,000 particles), the paper's eleven elongation "
        "limits (slow)",
        run_griffith_table1},
-  });
+  };
+}
+
+} // namespace
+
+const std::vector<Case>& all_cases() {
+  static const std::vector<Case> cases = [] {
+    std::vector<Case> list = elastic_cases();
+    for (Case& c : fracture_and_fibre_cases()) {
+      list.push_back(std::move(c));
+    }
+    return with_user_structures(std::move(list));
+  }();
   return cases;
 }
 

@@ -66,6 +66,53 @@ SolverSpec increment_solver(const SolverSpec& scene_solver, IntegratorKind kind)
   return solver;
 }
 
+/// ‖free-dof force‖ / max(‖reactions‖, 5 % of the largest reactions so far), the force on
+/// each degree of freedom a particle's force density times its volume. After a failure the
+/// reactions fall towards zero and a residual relative to them can never become small; the
+/// reference is therefore never below 5 % of the largest reactions so far, which this object
+/// remembers between calls.
+class RelativeResidual {
+public:
+  explicit RelativeResidual(const Model& model) : model_(model), constrained_(3 * model.size(), 0) {
+    for (const Constraint& c : model.constraints) {
+      constrained_[3 * c.particle + c.component] = 1;
+    }
+  }
+
+  double operator()(const Simulation& sim) {
+    double free = 0, reactions = 0;
+    for (std::size_t d = 0; d < constrained_.size(); ++d) {
+      const double f = sim.state().force[d] * model_.particles.volume[d / 3];
+      (constrained_[d] ? reactions : free) += f * f;
+    }
+    largest_reactions_ = std::max(largest_reactions_, std::sqrt(reactions));
+    const double reference = std::max(std::sqrt(reactions), 0.05 * largest_reactions_);
+    return reference > 0 ? std::sqrt(free) / reference : std::sqrt(free);
+  }
+
+private:
+  const Model& model_;
+  std::vector<std::uint8_t> constrained_;
+  double largest_reactions_ = 0;
+};
+
+/// The displacement of every degree of freedom from the model's reference positions.
+std::vector<double> displacement_of(const Simulation& sim, const Model& model) {
+  const std::size_t ndof = 3 * model.size();
+  std::vector<double> u(ndof);
+  for (std::size_t d = 0; d < ndof; ++d) {
+    u[d] = sim.state().position[d] - model.particles.position[d / 3][d % 3];
+  }
+  return u;
+}
+
+/// Every constraint at `fraction` of its full prescribed value.
+void set_constraint_level(Model& model, const std::vector<double>& full, double fraction) {
+  for (std::size_t k = 0; k < full.size(); ++k) {
+    model.constraints[k].value = fraction * full[k];
+  }
+}
+
 /// Method::static_: one step of the static solver per level (it solves, breaks and re-solves
 /// until no bond is beyond s0), the residual measured as the ADR path measures it.
 Outcome run_static(Model& model, const SolverSpec& scene_solver, const InitialSpec& initial,
@@ -146,35 +193,9 @@ Outcome run(Model& model, const SolverSpec& scene_solver, const InitialSpec& ini
   Simulation sim(model, increment_solver(scene_solver, IntegratorKind::adr), initial);
 
   const std::size_t ndof = 3 * model.size();
-  std::vector<std::uint8_t> constrained(ndof, 0);
-  for (const Constraint& c : model.constraints) {
-    constrained[3 * c.particle + c.component] = 1;
-  }
-  // After a failure the reactions fall towards zero and a residual relative to them can never
-  // become small; the reference is therefore never below 5 % of the largest reactions so far.
-  double largest_reactions = 0;
-  auto residual = [&]() {
-    double free = 0, reactions = 0;
-    for (std::size_t d = 0; d < ndof; ++d) {
-      const double f = sim.state().force[d] * model.particles.volume[d / 3];
-      (constrained[d] ? reactions : free) += f * f;
-    }
-    largest_reactions = std::max(largest_reactions, std::sqrt(reactions));
-    const double reference = std::max(std::sqrt(reactions), 0.05 * largest_reactions);
-    return reference > 0 ? std::sqrt(free) / reference : std::sqrt(free);
-  };
-  auto displacement = [&]() {
-    std::vector<double> u(ndof);
-    for (std::size_t d = 0; d < ndof; ++d) {
-      u[d] = sim.state().position[d] - model.particles.position[d / 3][d % 3];
-    }
-    return u;
-  };
-  auto set_level = [&](double fraction) {
-    for (std::size_t k = 0; k < full.size(); ++k) {
-      model.constraints[k].value = fraction * full[k];
-    }
-  };
+  RelativeResidual residual(model);
+  auto displacement = [&]() { return displacement_of(sim, model); };
+  auto set_level = [&](double fraction) { set_constraint_level(model, full, fraction); };
 
   const int n = static_cast<int>(settings.levels.size());
   auto level = [&](int k) {
@@ -229,7 +250,7 @@ Outcome run(Model& model, const SolverSpec& scene_solver, const InitialSpec& ini
     if (!check) {
       return true;
     }
-    const double r = residual();
+    const double r = residual(sim);
     if (r > settings.residual_tolerance && it < settings.max_iterations) {
       return true;
     }
