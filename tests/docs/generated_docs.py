@@ -52,11 +52,17 @@ class GeneratedDocs(unittest.TestCase):
                                   "--threads", "1"], capture_output=True, text=True, timeout=100)
         self.assertEqual(run.returncode, 0, run.stderr)
         self.assertIn("status converged", run.stdout)
-        # The README quotes the probe's printed value; it must be what the run prints.
-        probe = re.search(r"probe tip_deflection +(\S+)", run.stdout)
-        self.assertIsNotNone(probe, run.stdout)
-        self.assertIn(f"probe {'tip_deflection':<20} {probe.group(1)}", readme,
-                      "the README's printed tip deflection is not what the example prints")
+        # The README quotes the probe's printed value; it must be what the run prints. The static
+        # solve is exact only to its residual (about 1e-8 of the load), and its last digits follow
+        # the CPU's BLAS kernels, so the two agree to 1e-6, far below any change of the model.
+        printed = re.search(r"probe tip_deflection +(\S+)", run.stdout)
+        quoted = re.search(r"probe tip_deflection +(\S+)", readme)
+        self.assertIsNotNone(printed, run.stdout)
+        self.assertIsNotNone(quoted, "the README quotes no tip deflection")
+        self.assertLessEqual(abs(float(quoted.group(1)) - float(printed.group(1))),
+                             1e-6 * abs(float(printed.group(1))),
+                             f"the README's tip deflection {quoted.group(1)} is not what the "
+                             f"example prints ({printed.group(1)}): paste the run's output")
 
 
 if __name__ == "__main__":
