@@ -24,6 +24,7 @@ struct RunArgs {
   std::string out_dir = "out";
   int threads = 0;
   bool print_defaults = false;
+  bool print_reference = false;
   std::size_t checkpoint_every = 0;
   std::string checkpoint;
   std::string restart;
@@ -72,8 +73,13 @@ int run(const RunArgs& a) {
     fmt::print("{}", scene_template());
     return 0;
   }
+  if (a.print_reference) {
+    fmt::print("{}", scene_reference());
+    return 0;
+  }
   if (a.scene.empty()) {
-    fmt::print(stderr, "error: pd run needs a scene file (or --print-defaults)\n");
+    fmt::print(stderr,
+               "error: pd run needs a scene file (or --print-defaults, --print-scene-reference)\n");
     return 1;
   }
   set_threads(a.threads);
@@ -133,6 +139,8 @@ Command add_run_command(CLI::App& app) {
   cmd->add_option("-o,--output", a->out_dir, "output folder")->capture_default_str();
   add_threads_option(*cmd, a->threads);
   cmd->add_flag("--print-defaults", a->print_defaults, "print a commented scene template and exit");
+  cmd->add_flag("--print-scene-reference", a->print_reference,
+                "print the scene reference (Markdown, docs/scene-reference.md) and exit");
   add_count_option(*cmd, "--checkpoint-every", a->checkpoint_every,
                    "write the complete run state every N steps (atomically; also at the end and "
                    "on Ctrl-C); 0: only then",

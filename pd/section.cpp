@@ -140,7 +140,7 @@ Command add_section_command(CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "section", "PD / continuum bending, shear and axial stiffness of the cross-section of the "
                  "scene's first body, infinitely long (the a-priori part of a structure's error "
-                 "budget, verification/cases/STRUCTURES.md)");
+                 "budget, docs/theory/structures.md)");
   cmd->add_option("scene", a->scene, "scene file (YAML)")->required();
   cmd->add_option("--span", a->span, "axis along which the body is long")
       ->check(CLI::IsMember({"x", "y", "z"}))

@@ -6,7 +6,7 @@
 #   bash tools/snapshot_commits.sh WORKTREE OUT COMMIT...
 #
 # WORKTREE is created (git worktree add --detach) if missing; a snapshot already in OUT is kept.
-# Used for FIBRES_BITWISE.md (each change that brought the fibre work in, against its parent).
+# Used as docs/maintainers.md describes (each change that brought the fibre work in, against its parent).
 set -u
 if [ $# -lt 3 ]; then
   sed -n 2,9p "$0"

@@ -206,4 +206,4 @@ def section_parts(page: Page) -> str:
             "used before the defaults, with everything else (mirror clamps, solver, λ) as the "
             "default row; the rows without one of the default's corrections come from the "
             "sweep's surface/volume knobs. Signed error, + = PD too soft; section bending / shear "
-            "is the cross-section's PD/continuum stiffness (STRUCTURES.md).</p>" + "".join(tables))
+            "is the cross-section's PD/continuum stiffness (docs/theory/structures.md).</p>" + "".join(tables))

@@ -49,7 +49,7 @@ def section(page: Page) -> str:
             f"paper reports between its PD and FE models ({esc(levels)}); ours is in <i>error vs "
             "FE</i>, gates, verdicts and wall times are in the scorecard. For the structures, "
             "<i>budget</i> splits PD/FE into the factor the cross-section's own stiffness predicts "
-            "and what the supports, load and ends add (verification/cases/STRUCTURES.md).</p>")
+            "and what the supports, load and ends add (docs/theory/structures.md).</p>")
     fails = [n for n, r in verify.items() if R.ok(r) and not r["result"].get("passed")]
     failtxt = (f"<p class=\"fail\">Gates failing: {esc(', '.join(f.split(':')[1] for f in fails))}</p>"
                if fails else "<p class=\"pass\">All gates that ran passed.</p>")

@@ -697,8 +697,8 @@ std::vector<double> bond_correction_factors(const CorrectionSpec& spec,
   }
   case SurfaceCorrection::macek_silling: {
     // What Macek & Silling (2007, "Peridynamics via finite element analysis", Finite Elem. Anal.
-    // Des. 43:1169) did exactly could not be confirmed: the paper is not in /work/shared/papers
-    // and the search corpora hold neither its text nor a code that implements it. Miranda et al.
+    // Des. 43:1169) did exactly could not be confirmed: neither its text nor a code that
+    // implements it was available. Miranda et al.
     // 2019 §2.1 only say the correction adjusts c near free surfaces and interfaces because c =
     // 18K/(πδ⁴) (a bulk-modulus calibration) assumes a full horizon. Implemented here is the
     // correction that follows from that calibration: the particle's factor is the classical over

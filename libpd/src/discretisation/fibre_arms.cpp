@@ -326,7 +326,7 @@ struct Balance {
 /// 0.7 after 8 passes (measured with the sub-cell volumes the graded sets had before d9bb363; with
 /// their Voronoi areas 0.4–0.7 % of the arms still need cuts beyond 90 %). The balance then needs
 /// more freedom than the weights of the arms (a larger neighbourhood: at α = 8, about 30 arms per
-/// particle, it applies on the same disks; verification/cases/ELLIPTIC_DISK.md), which this
+/// particle, it applies on the same disks; docs/theory/elliptic-disk.md), which this
 /// function does not have. relax_moduli then corrects what the imbalance does to the body's
 /// moduli.
 Balance balance_arms(int dim, const ParticleSet& particles, const BondFamily& family,

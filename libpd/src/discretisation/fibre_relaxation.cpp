@@ -178,7 +178,7 @@ Released released_energy(int dim, const ParticleSet& particles, const FibreArms&
 /// particle's fourth moments reproduce: on the elliptic disks, 4.3–4.8 % of the isotropic mode's
 /// energy and 6.6–7.6 % of the deviatoric modes' are released, at every density from 1,800 to
 /// 39,200 particles. That is a Poisson ratio of about 0.305 where the material says 0.3, and a
-/// crack that opens 1 % too wide however fine the set (verification/cases/ELLIPTIC_DISK.md): a
+/// crack that opens 1 % too wide however fine the set (docs/theory/elliptic-disk.md): a
 /// discretisation error that does not fall.
 ///
 /// So the network is relaxed here once, as a homogenisation: each strain mode of strain_modes is

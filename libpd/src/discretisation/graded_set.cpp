@@ -90,7 +90,7 @@ double unit(std::mt19937_64& rng) {
 /// how much of the body each particle stands for (they differ from the Voronoi cells by −55 to
 /// +70 % at the 1st and 99th percentiles on the disk of 7,200 particles), and every sum over
 /// neighbours Σ_j V_j g(x_j) (eq. 40's weighted length, the arms' moments) misses its integral by
-/// that much. Measured on the elliptic disks (verification/cases/ELLIPTIC_DISK.md): the RMS
+/// that much. Measured on the elliptic disks (docs/theory/elliptic-disk.md): the RMS
 /// displacement error falls by 34–41 % at every density.
 ///
 /// The nearest particle to a sample in a's sub-cell is among a's `candidates` nearest unless the

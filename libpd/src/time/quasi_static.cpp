@@ -211,7 +211,7 @@ Outcome run(Model& model, const SolverSpec& scene_solver, const InitialSpec& ini
   // arm's plastic stretch from the increment's start at every evaluation (a return mapping over
   // the increment, as an implicit solver makes it). Measured on griffith's c/3250 crack: with
   // the plastic stretch accumulated along the path, σ_f rose 25 % from path spacing c/32 to c/64;
-  // recomputed, 12 % (verification/cases/GRIFFITH.md).
+  // recomputed, 12 % (docs/theory/griffith.md).
   const bool plastic_from_increment_start =
       model.effects.bond_model == BondModel::virtual_fibres && model.effects.plasticity;
   auto begin_increment = [&]() {

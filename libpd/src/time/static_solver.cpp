@@ -36,7 +36,7 @@
 // re-solve; that needs a factorisation per bond (the beam breaks 5,400 in its first increment).
 // Breaking all at once is the cheaper approximation, and it can overshoot: a bond broken in the
 // same event as the one that overloaded it might have unloaded had they broken in turn
-// (QUASI_BRITTLE.md measures what this does on rc-beam). During Newton the kernel
+// (docs/theory/quasi-brittle.md measures what this does on rc-beam). During Newton the kernel
 // must neither break bonds nor drop the force of a bond beyond s0 (an iterate is not an
 // equilibrium): s0 is lifted to no_limit while Newton runs (BreakingSuspended), so the residual
 // is the elastic one of the unbroken bonds. Restoring only the broken flags after each

@@ -199,15 +199,15 @@ TEST(FibrePatchTest, InteriorStressIsTheContinuumsOnIrregularGradedParticles) {
   // Issue 17's patch test: sizes varying more than ten-fold, columns that do not match, points
   // jittered by ±0.15 s. With the per-particle moment weights (volume_correction other than
   // none, the scenes' default) every interior particle carries the continuum's stress; with the
-  // kernel weights alone the arrangement shows (measured 2026-11-25: 21 % jittered).
+  // kernel weights alone the arrangement shows (about 20 % on this plate).
   const PatchResult r = patch(graded_plate(0.006, 0.15, 1), pd::VolumeCorrection::moment);
   EXPECT_GE(r.size_ratio, 10.0);
   EXPECT_GE(r.interior, 1000U);
   EXPECT_LT(r.stress_error, 0.01);
   // No spurious forces: the pair balance (fibre_arms.cpp, balance_odd_moments) zeroes every
   // interior particle's third arm moment, so the homogeneous strain leaves no net force. Without
-  // it the odd moments of the irregular set leave max |b| h/|σ| = 0.18 (measured 2026-11-25 on the
-  // s0 = 0.004 plate); with it 9.6e-8 there, the conjugate gradients' tolerance.
+  // it the odd moments of the irregular set leave max |b| h/|σ| near 0.2; with it the force is at
+  // the level of the solver's tolerance.
   EXPECT_LT(r.force, 1e-6);
   EXPECT_LT(std::abs(r.mean_force_x), 1e-6);
   const PatchResult plain = patch(graded_plate(0.006, 0.15, 1), pd::VolumeCorrection::none);
@@ -379,11 +379,10 @@ TEST(FibreRelaxedModuli, AnUnbalancedPointCloudRelaxesToTheMaterialsModuli) {
   // Jittered by ±0.45 s the plate's arms cannot be balanced (fibre_arms.cpp, balance_arms), so
   // a homogeneous strain leaves interior forces, and the relaxed plate would be softer than its
   // material, more in shear than in bulk: a wrong Poisson ratio at every resolution
-  // (verification/cases/ELLIPTIC_DISK.md). relax_moduli (fibre_relaxation.cpp) raises each
+  // (docs/theory/elliptic-disk.md). relax_moduli (fibre_relaxation.cpp) raises each
   // particle's moduli by what its neighbourhood releases; relaxed here with another held set and
-  // solver, the plate keeps the continuum's energy in every mode. Measured 2026-11-28: the
-  // library's relaxation released 6.9 % (isotropic) and 8.9 % (deviatoric) before its correction;
-  // after it, relaxed here, the plate keeps 1.0040, 0.9979 and 1.0030 of the continuum's energy.
+  // solver, the plate keeps the continuum's energy in every mode. Uncorrected, the relaxation
+  // releases several per cent of it (more in the deviatoric modes than the isotropic one).
   pd::Model m =
       pd::build_model(fibre_spec(pd::VolumeCorrection::moment), jittered_plate(60, 0.45, 2));
   const pd::FibreArms& arms = m.fibre_arms;

@@ -1018,7 +1018,7 @@ TEST(SceneParser, MissingFile) {
 #ifdef PD_SCENES_DIR
 TEST(SceneParser, DocumentedExampleParses) {
   const std::filesystem::path doc =
-      std::filesystem::path(PD_SCENES_DIR) / ".." / ".." / "libpd" / "SCENE_FORMAT.md";
+      std::filesystem::path(PD_SCENES_DIR) / ".." / ".." / "docs" / "scenes.md";
   std::ifstream in(doc);
   ASSERT_TRUE(in) << doc;
   std::stringstream buffer;
@@ -1030,7 +1030,7 @@ TEST(SceneParser, DocumentedExampleParses) {
   ASSERT_NE(begin, std::string::npos);
   ASSERT_NE(end, std::string::npos);
   const std::string example = text.substr(begin + open.size(), end - begin - open.size());
-  const pd::Scene s = pd::parse_scene(example, "SCENE_FORMAT.md example");
+  const pd::Scene s = pd::parse_scene(example, "docs/scenes.md example");
   EXPECT_TRUE(s.warnings.empty());
   EXPECT_EQ(s.model.bodies.size(), 2u);
   EXPECT_TRUE(s.model.effects.damage && s.model.effects.plasticity && s.model.effects.damping);

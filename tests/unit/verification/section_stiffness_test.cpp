@@ -144,7 +144,7 @@ TEST(SectionStiffness, TwoDimensionalDefaultTreatment) {
 
 // The default treatment in 3D, on the shipped beams' section (6 × 8 spacings, m = 2√3). Its
 // ghosts are extrapolated from the relaxed body as in a run; treated as free particles instead
-// (as before 2026-11-25) they let the surface relax and the bending factor came out 0.982.
+// they would let the surface relax where a run's cannot (bending factor about 0.98).
 TEST(SectionStiffness, DefaultTreatmentBeamSection) {
   const auto spec = unit_lattice(2 * 1.7320508075688772, pd::SurfaceCorrection::ghost,
                                  pd::VolumeCorrection::gradient);

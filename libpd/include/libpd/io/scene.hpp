@@ -112,4 +112,8 @@ Model build_model(const Scene& scene);
 /// A commented template listing every key with its default, unit and meaning.
 std::string scene_template();
 
+/// The scene reference in Markdown (docs/scene-reference.md): one table per section with every
+/// key's type, unit, allowed values, default and meaning.
+std::string scene_reference();
+
 } // namespace pd

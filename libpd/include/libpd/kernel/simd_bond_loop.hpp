@@ -36,12 +36,11 @@ RowKernel simd_row_kernel(StretchKind stretch, bool plasticity, bool damage, boo
 /// Name of the instruction set the dispatcher picks on this CPU, e.g. "AVX3" (= AVX-512), "AVX2".
 std::string simd_target_name();
 
-/// Below this many directed bonds the SIMD kernel runs on one thread. Measured (2026-11-24, quiet
-/// 2-core EPYC, AVX3, `pd-kernel-bench --benchmark_filter=Threshold --benchmark_repetitions=5`,
-/// medians): 2 threads / 1 thread = 1.61× at 20,812 directed bonds, 1.81× at 52,116, 1.97× at
-/// 490,372 (the clamped beam); so the second thread pays from ~20k bonds, and the threshold sits
-/// a little above that. Under load the second thread can lose at every size (seen at load 7–10):
-/// that is a reason for `--threads 1` on a busy machine, not for a higher threshold.
+/// Below this many directed bonds the SIMD kernel runs on one thread. On a quiet machine
+/// (`pd-kernel-bench --benchmark_filter=Threshold`) a second thread pays from about 20,000
+/// directed bonds, nearly doubling the rate at the clamped beam's size; the threshold sits a
+/// little above that. Under load the second thread can lose at every size: that is a reason for
+/// `--threads 1` on a busy machine, not for a higher threshold.
 inline constexpr std::size_t simd_parallel_min_bonds = 32768;
 
 } // namespace pd::kernel

@@ -128,7 +128,7 @@ void read_particle_body(Reader& r, const Fields& f, BodySpec& body, Marks& marks
   try {
     body.points = std::make_shared<const PointCloud>(read_particle_file(path.string(), r.dim));
   } catch (const ParticleFileError& error) {
-    r.fail(e->at(), error.what(), "fix the file (see SCENE_FORMAT.md, particle files)");
+    r.fail(e->at(), error.what(), "fix the file (see docs/scenes.md, particle files)");
   }
   Box bounds{body.points->position.front(), body.points->position.front()};
   for (const Vec3& p : body.points->position) {

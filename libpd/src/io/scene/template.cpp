@@ -124,7 +124,7 @@ std::string scene_template() {
   std::string out =
       "# libpd scene template, generated from the scene schema (pd run --print-defaults).\n"
       "# Every key is listed with its meaning, unit, allowed range and default. Optional keys\n"
-      "# and alternatives are commented out: remove the '# ' to use them. See SCENE_FORMAT.md.\n";
+      "# and alternatives are commented out: remove the '# ' to use them. See docs/scenes.md.\n";
   scene::write_section(out, scene::root_section, {}, 0, false);
   return out;
 }
