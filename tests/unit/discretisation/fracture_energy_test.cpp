@@ -12,6 +12,7 @@
 #include "libpd/discretisation/model.hpp"
 #include "libpd/io/scene.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <gtest/gtest.h>
@@ -193,6 +194,15 @@ std::vector<Row> measure(const Specimen& s, const std::string& surface, const st
   try {
     const pd::Scene scene = pd::parse_scene(scene_text(s, surface, volume, extent), "i.yaml");
     const pd::Model m = pd::build_model(scene);
+    const auto& s0s = m.field.bond_critical_stretch;
+    if (!s0s.empty()) {
+      const auto [lo, hi] = std::minmax_element(s0s.begin(), s0s.end());
+      std::printf("%-18s %-22s s0 from %.4g to %.4g, %zu directed bonds\n", s.name.c_str(),
+                  pair.c_str(), *lo, *hi, s0s.size());
+    } else {
+      std::printf("%-18s %-22s s0 %.4g uniform\n", s.name.c_str(), pair.c_str(),
+                  m.field.critical_stretch);
+    }
     for (const Plane& p : planes_for(s.dim, extent, s.clamp)) {
       rows.push_back({s.name, pair, p.name, crossing_ratio(m, p)});
     }
