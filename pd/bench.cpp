@@ -180,6 +180,7 @@ void print_json(const BenchArgs& a, const Model& model, const ForceEvaluator& fo
 }
 
 int bench(const BenchArgs& a) {
+  const StopOnInterrupt stop("bench");
   set_threads(a.threads);
   Scene scene = load_or_explain(a.scene);
   if (!a.stretch.empty()) {

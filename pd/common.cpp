@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <fmt/format.h>
 #include <fstream>
 #include <sys/resource.h>
@@ -117,6 +118,12 @@ void OtherCpuMeter::stop() {
 double OtherCpuMeter::cores() const {
   return wall_seconds_ > 0 ? other_seconds_ / wall_seconds_ : 0.0;
 }
+
+StopOnInterrupt::StopOnInterrupt(std::string command)
+    : abandon_([command = std::move(command)](int sig) {
+        fmt::print(stderr, "pd {}: interrupted by signal {} ({})\n", command, sig,
+                   ::strsignal(sig));
+      }) {}
 
 Scene load_or_explain(const std::string& path) {
   Scene scene = load_scene(path);

@@ -2,6 +2,7 @@
 // shape of a subcommand (its CLI11 app and the action main runs when it was chosen).
 #pragma once
 
+#include "libpd/app/interrupt.hpp"
 #include "libpd/io/scene.hpp"
 
 #include <CLI/CLI.hpp>
@@ -16,7 +17,19 @@ namespace pd::cli {
 /// 4 a stability gate failed, 5 the run was interrupted).
 /// Exit code of a run stopped by Ctrl-C, SIGTERM or SIGHUP (its results so far are written):
 /// not 0, so that a script or scheduler never takes a partial run for a finished one.
-inline constexpr int exit_interrupted = 5;
+inline constexpr int exit_interrupted = pd::exit_status_interrupted;
+
+/// For a command with nothing to save on a stop request (pd bench, pd compare: what they print
+/// or write is complete row by row): Ctrl-C, SIGTERM or SIGHUP end it within a second, with exit
+/// status 5 and a line on stderr that says so (app/interrupt.hpp).
+class StopOnInterrupt {
+public:
+  explicit StopOnInterrupt(std::string command);
+
+private:
+  InterruptGuard guard_{true};
+  AbandonOnInterrupt abandon_;
+};
 
 struct Command {
   CLI::App* app = nullptr;

@@ -21,6 +21,7 @@ struct CompareArgs {
 };
 
 int compare(const CompareArgs& a) {
+  const StopOnInterrupt stop("compare");
   set_threads(a.threads);
   const std::filesystem::path dir = a.scenes_dir.empty() ? verification::default_scenes_dir()
                                                          : std::filesystem::path(a.scenes_dir);

@@ -51,7 +51,7 @@ std::string argument_error(int argc, char** argv) {
 } // namespace
 
 int main(int argc, char** argv) {
-  pd::restart_with_this_cpus_blas_kernels(argv);
+  pd::restart_with_process_settings(argv);
   // Under mpirun every rank runs this main; MPI lives as long as it (a no-op without MPI).
   const pd::MpiSession mpi(argc, argv);
   const bool split = pd::world_communicator().size() > 1;

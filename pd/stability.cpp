@@ -125,6 +125,7 @@ void print_row(const std::string& name, const StabilityResult& r) {
 }
 
 int stability(const StabilityArgs& a) {
+  const StopOnInterrupt stop("stability");
   set_threads(a.threads);
   const auto targets = parse_targets(a.integrators);
   if (!targets) {

@@ -16,6 +16,8 @@
 #include <cstdlib>
 #include <fmt/format.h>
 #include <memory>
+#include <mutex>
+#include <optional>
 #include <unistd.h>
 #include <vector>
 
@@ -51,11 +53,78 @@ bool is_scene_file(const std::string& arg) {
   return ext == ".yaml" || ext == ".yml";
 }
 
+/// What pd verify has done, in DIR/summary.json: each case's verdict, written at the end and, on
+/// a stop request, at once (by the watchdog of app/interrupt.hpp while a case cannot stop): the
+/// cases finished keep their verdicts, the one running and the rest are `interrupted`, none is
+/// FAILED for it, and the command exits 5.
+class Ledger {
+public:
+  Ledger(const std::string& out_dir, std::vector<std::string> names)
+      : dir_(out_dir), names_(std::move(names)), verdicts_(names_.size()) {}
+
+  void finish(std::size_t k, bool passed) { finish(k, passed ? "passed" : "failed"); }
+  /// A scene's verdict: passed, failed or measured (scene_verification.hpp).
+  void finish(std::size_t k, const std::string& verdict) {
+    const std::lock_guard lock(mutex_);
+    verdicts_[k] = verdict;
+  }
+
+  /// `sig`: the signal that stopped the command, 0 if it ran to its end.
+  void write(int sig) const {
+    const std::lock_guard lock(mutex_);
+    Json j = Json::object();
+    j["command"] = "verify";
+    bool failed = false;
+    Json cases = Json::array();
+    for (std::size_t k = 0; k < names_.size(); ++k) {
+      Json c = Json::object();
+      c["name"] = names_[k];
+      c["status"] = verdicts_[k].empty() ? "interrupted" : verdicts_[k];
+      failed = failed || verdicts_[k] == "failed";
+      cases.push_back(std::move(c));
+    }
+    j["status"] = sig != 0 ? "interrupted" : failed ? "failed" : "passed";
+    if (sig != 0) {
+      j["stop_signal"] = sig;
+    }
+    j["cases"] = std::move(cases);
+    std::filesystem::create_directories(dir_);
+    write_file_atomically(dir_ / "summary.json", j.dump());
+  }
+
+private:
+  mutable std::mutex mutex_;
+  std::filesystem::path dir_;
+  std::vector<std::string> names_;
+  std::vector<std::string> verdicts_; ///< "passed", "failed", "measured", or empty while running
+};
+
+/// The end of pd verify: the summary, the count and the exit status (2 if a gate failed, 5 if
+/// interrupted).
+int conclude(const Ledger& ledger, const InterruptGuard& interrupt, std::size_t cases, int failed) {
+  ledger.write(interrupt.signal());
+  if (interrupt.requested()) {
+    fmt::print(stderr, "interrupted by signal {}: the cases not finished are not judged\n",
+               interrupt.signal());
+    return exit_interrupted;
+  }
+  fmt::print("{} passed, {} failed\n", cases - static_cast<std::size_t>(failed), failed);
+  return failed > 0 ? 2 : 0;
+}
+
 /// pd verify SCENE.yaml: the scene against its FE reference; exit 1 if it cannot run, 2 if the
 /// gate fails.
 int verify_scenes(const VerifyArgs& a, const verification::Context& ctx) {
-  int failed = 0;
+  const InterruptGuard interrupt(true);
+  std::vector<std::string> names;
   for (const std::string& file : a.cases) {
+    names.push_back(std::filesystem::path(file).stem().string());
+  }
+  Ledger ledger(a.out_dir, names);
+  const AbandonOnInterrupt abandon([&ledger](int sig) { ledger.write(sig); });
+  int failed = 0;
+  for (std::size_t k = 0; k < a.cases.size() && !interrupt.requested(); ++k) {
+    const std::string& file = a.cases[k];
     fmt::print("== {} — PD vs deal.II on the same continuum problem\n", file);
     std::fflush(stdout);
     const auto t0 = std::chrono::steady_clock::now();
@@ -69,28 +138,37 @@ int verify_scenes(const VerifyArgs& a, const verification::Context& ctx) {
       fmt::print(stderr, "error: {}\n", e.what());
       return 1;
     }
+    if (interrupt.requested()) {
+      break; // its run stopped early: no verdict
+    }
     const double wall =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     result["wall_seconds"] = wall;
-    const std::string name = std::filesystem::path(file).stem().string();
+    const std::string& name = names[k];
     write_file_atomically(std::filesystem::path(a.out_dir) / (name + ".json"), result.dump());
     const std::string verdict = result.find("verdict")->text().value_or("failed");
     fmt::print("   {} in {:.1f} s -> {}/{}.json\n", upper(verdict), wall, a.out_dir, name);
     if (verdict == "measured") {
       fmt::print("   (no --gate: the differences are measured, not judged)\n");
     }
+    ledger.finish(k, verdict);
     failed += verdict == "failed" ? 1 : 0;
   }
-  return failed > 0 ? 2 : 0;
+  return conclude(ledger, interrupt, a.cases.size(), failed);
 }
 
-/// Run one case, write its JSON and say whether its gate passed.
-bool run_case(const verification::Case& c, const verification::Context& ctx,
-              const std::string& out_dir) {
+/// Run one case, write its JSON and say whether its gate passed; nothing if a stop request
+/// came while it ran (its runs ended early, so its numbers are not its result).
+std::optional<bool> run_case(const verification::Case& c, const verification::Context& ctx,
+                             const std::string& out_dir, const InterruptGuard& interrupt) {
   fmt::print("== {} — {}\n", c.name, c.summary);
   std::fflush(stdout);
   const auto t0 = std::chrono::steady_clock::now();
   Json result = c.run(ctx);
+  if (interrupt.requested()) {
+    fmt::print("   interrupted\n");
+    return std::nullopt;
+  }
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   result["wall_seconds"] = wall;
   write_file_atomically(std::filesystem::path(out_dir) / (c.name + ".json"), result.dump());
@@ -126,6 +204,7 @@ int verify(const VerifyArgs& a) {
     }
     return verify_scenes(scene_args, ctx);
   }
+  const InterruptGuard interrupt(true);
   std::vector<const verification::Case*> selected;
   for (const auto& case_name : a.cases) {
     // --sweep runs each named case's accuracy-vs-time sweep, the case CASE-sweep.
@@ -143,14 +222,21 @@ int verify(const VerifyArgs& a) {
       selected.push_back(&c);
     }
   }
-  int failed = 0;
+  std::vector<std::string> names;
   for (const auto* c : selected) {
-    if (!run_case(*c, ctx, a.out_dir)) {
-      ++failed;
+    names.push_back(c->name);
+  }
+  Ledger ledger(a.out_dir, names);
+  const AbandonOnInterrupt abandon([&ledger](int sig) { ledger.write(sig); });
+  int failed = 0;
+  for (std::size_t k = 0; k < selected.size() && !interrupt.requested(); ++k) {
+    const std::optional<bool> passed = run_case(*selected[k], ctx, a.out_dir, interrupt);
+    if (passed) {
+      ledger.finish(k, *passed);
+      failed += *passed ? 0 : 1;
     }
   }
-  fmt::print("{} passed, {} failed\n", selected.size() - static_cast<std::size_t>(failed), failed);
-  return failed > 0 ? 2 : 0;
+  return conclude(ledger, interrupt, selected.size(), failed);
 }
 
 } // namespace

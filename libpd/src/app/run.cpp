@@ -10,9 +10,11 @@
 #include "libpd/app/run_checkpoints.hpp"
 #include "libpd/app/run_output.hpp"
 #include "libpd/app/run_summary.hpp"
+#include "libpd/core/atomic_file.hpp"
 #include "libpd/kernel/round_off.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cstdio>
 #include <fmt/format.h>
@@ -34,18 +36,28 @@ public:
   RunOutcome run() {
     const auto start = std::chrono::steady_clock::now();
     claim_output();
-    setup();
-    restore();
-    out_.setup_seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    // From the claim to the last file: a stop request (Ctrl-C, SIGTERM, SIGHUP) ends the
+    // stepping, and one arriving while the final files are written only repeats the request.
+    const InterruptGuard interrupt(options_.stop_on_interrupt);
     {
-      // From the first step to the last file: a stop request (Ctrl-C, SIGTERM, SIGHUP) ends the
-      // stepping, and one arriving while the final files are written only repeats the request.
-      const InterruptGuard interrupt(options_.stop_on_interrupt);
+      // Set-up and a step need not poll: where they do not answer a request in time (a large
+      // model's bonds, the static solve's factorisation), the run is abandoned with a summary.
+      std::optional<AbandonOnInterrupt> abandon;
+      if (options_.stop_on_interrupt) {
+        if (folder_) { // listed now: the watchdog's summary must not miss the manifest
+          folder_->add(folder_->dir() / "summary.json");
+        }
+        abandon.emplace([this](int sig) { write_abandoned_summary(sig); });
+      }
+      setup();
+      restore();
+      out_.setup_seconds =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      progress_.phase = "solve";
       advance(interrupt);
-      save_final_state();
-      write_results();
     }
+    save_final_state();
+    write_results();
     return std::move(out_);
   }
 
@@ -166,6 +178,8 @@ private:
     probes_ = resolve_probes(scene_.probes, model_); // on the whole model, before any split
     out_.particles = model_.size();
     out_.bonds = model_.family.bond_count();
+    progress_.particles = out_.particles;
+    progress_.bonds = out_.bonds;
     for (const LoadSpec& load : scene_.model.loads) {
       if (load.load.kind == BoxRegionLoad::Kind::point) {
         out_.point_load_particles[load.name] =
@@ -362,6 +376,7 @@ private:
   // and probes.csv now and then so that a killed run keeps its history.
   void after_step(const Simulation& s) {
     const std::size_t step = s.state().step;
+    progress_.steps = step;
     const std::size_t history_every = scene_.output.history_every;
     if (history_every > 0 && step % history_every == 0) {
       record(s);
@@ -452,6 +467,27 @@ private:
 
   bool unstable() const { return out_.result.status == RunStatus::unstable; }
 
+  // The summary of a run abandoned on a stop request (app/interrupt.hpp), written on the
+  // watchdog thread beside the busy one: only what progress_ holds, no state, no checkpoint
+  // (the state may be half-updated).
+  void write_abandoned_summary(int sig) const {
+    if (!folder_ || !comm().root()) {
+      return;
+    }
+    Json j = Json::object();
+    j["scene"] = scene_.path;
+    j["status"] = to_string(RunStatus::interrupted);
+    j["stop_signal"] = sig;
+    j["interrupted_in"] = std::string(progress_.phase.load());
+    j["particles"] = progress_.particles.load();
+    j["bonds"] = progress_.bonds.load();
+    j["steps"] = progress_.steps.load();
+    j["message"] = fmt::format("stopped by signal {} during the {}, which does not stop between "
+                               "steps: abandoned without a final state or checkpoint",
+                               sig, progress_.phase.load());
+    write_file_atomically(folder_->dir() / "summary.json", j.dump());
+  }
+
   // Hashing the model reads every bond array: only when a checkpoint is read or written.
   const CheckpointFingerprint& fingerprint() {
     if (!fingerprint_) {
@@ -475,6 +511,13 @@ private:
   std::optional<CheckpointFingerprint> fingerprint_;
   bool warned_tolerance_ = false;
   RunOutcome out_;
+  /// What an abandoned run's summary says, set by the run's thread and read by the watchdog.
+  struct {
+    std::atomic<const char*> phase{"set-up"};
+    std::atomic<std::size_t> particles{0};
+    std::atomic<std::size_t> bonds{0};
+    std::atomic<std::size_t> steps{0};
+  } progress_;
 };
 
 } // namespace

@@ -34,15 +34,33 @@ std::string openblas_core_for_this_cpu() {
   return {};
 }
 
-void restart_with_this_cpus_blas_kernels(char** argv) {
-  if (std::getenv("OPENBLAS_CORETYPE") != nullptr) {
+namespace {
+
+/// Set on the restart that chose passive waiting, so that the restarted program can take the
+/// choice back out of its environment once libgomp has read it.
+constexpr const char* passive_marker = "PD_CHOSE_OMP_WAIT_POLICY";
+
+} // namespace
+
+void restart_with_process_settings(char** argv) {
+  if (std::getenv(passive_marker) != nullptr) {
+    // libgomp has read it: programs pd starts (pd-fem, LAMMPS) see the user's environment.
+    unsetenv("OMP_WAIT_POLICY");
+    unsetenv(passive_marker);
     return;
   }
-  const std::string core = openblas_core_for_this_cpu();
-  if (core.empty() || setenv("OPENBLAS_CORETYPE", core.c_str(), 1) != 0) {
-    return;
+  bool changed = false;
+  if (std::getenv("OPENBLAS_CORETYPE") == nullptr) {
+    const std::string core = openblas_core_for_this_cpu();
+    changed = !core.empty() && setenv("OPENBLAS_CORETYPE", core.c_str(), 1) == 0;
   }
-  execv("/proc/self/exe", argv);
+  if (std::getenv("OMP_WAIT_POLICY") == nullptr && std::getenv("GOMP_SPINCOUNT") == nullptr &&
+      setenv("OMP_WAIT_POLICY", "passive", 1) == 0 && setenv(passive_marker, "1", 1) == 0) {
+    changed = true;
+  }
+  if (changed) {
+    execv("/proc/self/exe", argv);
+  }
 }
 
 namespace {

@@ -2,6 +2,7 @@
 // (nonsymmetric), with Eigen's own solvers when libpd is built without SuiteSparse.
 #include "sparse_factorisation.hpp"
 
+#include "libpd/core/blas.hpp"
 #include "libpd/core/memory.hpp"
 
 #include <Eigen/SparseCholesky>
@@ -115,6 +116,9 @@ std::vector<int> group_ordering(const SparseMatrix& K, const std::vector<std::si
   return order;
 }
 
+/// Factor entries from which CHOLMOD's BLAS runs on the threads OpenMP has (below, on one).
+constexpr std::size_t threaded_blas_entries = 20'000'000;
+
 /// CHOLMOD supernodal K = L Lᵀ, called directly (Eigen's wrapper chooses the ordering itself).
 class Cholmod final : public SparseFactorisation {
 public:
@@ -139,6 +143,16 @@ public:
     // The symbolic analysis knows the factor's size: refuse a factor the machine cannot hold
     // before the numeric factorisation runs into the OOM killer.
     check_fits(static_cast<double>(factor_bytes()));
+    // A small factor runs its BLAS on one thread. Its supernodes are small and many, so each
+    // BLAS call is a short parallel region whose threads mostly wait, and on a busy machine
+    // waiting for a descheduled thread cost more than the second thread gave: the clamped beam
+    // (9.6 M factor entries, 2 cores, load 11–14, passive waiting) took 9.5 s with 2 BLAS
+    // threads against 4.9 s with 1, while the plate (32.9 M) stayed faster with 2. The threshold
+    // lies between the two; what a small factor loses on a quiet machine is not measured yet.
+    std::optional<SerialBlas> serial;
+    if (factor_nonzeros() < threaded_blas_entries) {
+      serial.emplace();
+    }
     if (!cholmod_factorize(&A, factor_, &common_) || common_.status != CHOLMOD_OK ||
         factor_->minor < factor_->n) {
       singular("the Cholesky factorisation (CHOLMOD)");

@@ -1,17 +1,21 @@
 // Stopping a run from outside: Ctrl-C (SIGINT), a scheduler's SIGTERM before its SIGKILL, and a
 // closed terminal's SIGHUP only set a flag, which the run polls after each step and then stops
 // cleanly (status `interrupted`, outputs and a checkpoint written) instead of dying with
-// half-written files.
+// half-written files. Work that cannot poll (building a model, CHOLMOD's factorisation, a
+// verification case) is abandoned instead: a watchdog thread writes what is known and ends the
+// process, so that every phase answers within a second.
 #pragma once
 
 #include <csignal>
+#include <functional>
 
 namespace pd {
 
 /// While alive (and `active`), SIGINT, SIGTERM and SIGHUP request a stop instead of ending the
 /// process; later signals only repeat the request, so a second Ctrl-C while the final files are
-/// written cannot cut them short. The previous handlers are put back on destruction. Requests
-/// from before construction are forgotten.
+/// written cannot cut them short. The previous handlers are put back on destruction. Guards nest
+/// (a run inside `pd verify`): only the outermost installs the handlers and forgets requests from
+/// before its construction, so an inner one never loses a request the outer one has seen.
 class InterruptGuard {
 public:
   explicit InterruptGuard(bool active);
@@ -26,7 +30,33 @@ public:
 private:
   static constexpr int signals_[] = {SIGINT, SIGTERM, SIGHUP};
   bool active_;
+  bool outermost_ = false;
   struct sigaction previous_[3]{};
 };
+
+/// While alive, a stop request that the code has not acted on within `abandon_grace_seconds`
+/// (acting on it means destroying this object) ends the process with exit status 5: `write` is
+/// called on a watchdog thread with the signal, to record the interrupted state, and then
+/// _exit. It runs beside the busy thread, so it may only read what it owns or what is guarded
+/// against that thread. Several may be alive (a run inside a verification case inside `pd
+/// verify`): the innermost writes first. Meant for phases that cannot poll the request; where
+/// a phase polls, destroying this object before writing the final state keeps the files whole.
+class AbandonOnInterrupt {
+public:
+  explicit AbandonOnInterrupt(std::function<void(int signal)> write);
+  ~AbandonOnInterrupt();
+  AbandonOnInterrupt(const AbandonOnInterrupt&) = delete;
+  AbandonOnInterrupt& operator=(const AbandonOnInterrupt&) = delete;
+
+private:
+  std::function<void(int)> write_;
+};
+
+/// How long a stop request may go unanswered before the work is abandoned: half the second the
+/// user is promised, the other half for writing the interrupted state.
+inline constexpr double abandon_grace_seconds = 0.5;
+
+/// The exit status of an interrupted command (pd's exit codes, cli/main.cpp).
+inline constexpr int exit_status_interrupted = 5;
 
 } // namespace pd

@@ -16,11 +16,23 @@ std::string openblas_core();
 /// the plate's factorisation then takes 4.3 s instead of 1.9 s (Haswell kernels; 1 thread).
 std::string openblas_core_for_this_cpu();
 
-/// Where openblas_core_for_this_cpu names a kernel set, start the program again (execv of
-/// /proc/self/exe with `argv`) with OPENBLAS_CORETYPE set to it: OpenBLAS reads it only while it
-/// loads, before main, so main calls this first. A value the user set is kept; where the exec
-/// fails, the program runs on as it is.
-void restart_with_this_cpus_blas_kernels(char** argv);
+/// Start the program again (execv of /proc/self/exe with `argv`) with the settings that OpenBLAS
+/// and libgomp read only while they load, before main, so main calls this first:
+///  * OPENBLAS_CORETYPE where openblas_core_for_this_cpu names a kernel set;
+///  * OMP_WAIT_POLICY=passive. libgomp's default lets a thread that waits at the end of a
+///    parallel region spin for up to 300,000 rounds before it sleeps, and OpenBLAS's OpenMP
+///    build (under CHOLMOD) waits the same way between its many small parallel calls. On a
+///    machine whose cores are busy with other work a spinning thread takes the time slice the
+///    thread it waits for needs: measured on 2 cores at load 4–9, the clamped beam's static
+///    solve took 14–18 s with 2 threads against 3 s with 1 (86 s in dpotrf at load 7), and
+///    Model A's 300 steps 8–18 s against 1.5–2.2 s. Passive waiting (the thread sleeps at once)
+///    brought both within the one-thread time; a short spin (GOMP_SPINCOUNT=10000) did not
+///    (beam 4.4–5.6 s). The restarted program removes OMP_WAIT_POLICY again, so the programs it
+///    starts see the user's environment.
+/// A value the user set (OPENBLAS_CORETYPE, OMP_WAIT_POLICY or GOMP_SPINCOUNT) is kept; where the
+/// exec fails, the program runs on as it is. A program that links libpd itself sets
+/// OMP_WAIT_POLICY in its environment to the same effect.
+void restart_with_process_settings(char** argv);
 
 /// Runs the BLAS on one thread while it lives, and restores the thread counts after. CHOLMOD's
 /// supernodal factorisation splits its dense blocks over the BLAS's threads, and Debian's

@@ -1,0 +1,86 @@
+"""A stop request (SIGTERM, SIGINT, SIGHUP) ends every command within a second, whatever it is
+doing: set-up, the static solve's factorisation, ADR's steps, a verification case, a benchmark.
+Each is signalled at a random moment (seeded, so a failure can be repeated) and must exit with
+status 5 and, where the command writes one, a summary.json with status `interrupted`.
+
+The promise is one second (half of it the grace the busy work gets, app/interrupt.hpp); the
+bound checked is two, because the test machines are shared and a signalled process may wait for
+a time slice."""
+import json
+import os
+import random
+import signal
+import subprocess
+import time
+
+import pdcli
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+SCENES = os.path.join(ROOT, "verification", "scenes")
+BOUND_SECONDS = 2.0
+rng = random.Random(41)
+
+
+class Interrupts(pdcli.TestCase):
+    def signal_at_random(self, args, earliest, latest, sig=signal.SIGTERM):
+        """Start pd, signal it after a random delay and return (exit status, seconds to exit)."""
+        delay = rng.uniform(earliest, latest)
+        p = subprocess.Popen([pdcli.PD, *args], stdout=subprocess.DEVNULL,
+                             stderr=subprocess.DEVNULL, cwd=self.dir)
+        time.sleep(delay)
+        self.assertIsNone(p.poll(), f"pd {args[0]} ended before the signal at {delay:.2f} s")
+        t0 = time.monotonic()
+        p.send_signal(sig)
+        try:
+            status = p.wait(timeout=30)
+        except subprocess.TimeoutExpired:
+            p.kill()
+            p.wait()
+            self.fail(f"pd {args[0]} ignored signal {sig} for 30 s")
+        took = time.monotonic() - t0
+        print(f"pd {args[0]}: signal {int(sig)} at {delay:.2f} s, exit {status} after "
+              f"{took:.2f} s")
+        return status, took
+
+    def check(self, args, earliest, latest, summary, sig=signal.SIGTERM):
+        status, took = self.signal_at_random(args, earliest, latest, sig)
+        self.assertEqual(status, 5)
+        self.assertLess(took, BOUND_SECONDS)
+        if summary is not None:
+            with open(summary) as f:
+                s = json.load(f)
+            self.assertEqual(s["status"], "interrupted")
+            self.assertEqual(s["stop_signal"], int(sig))
+            return s
+        return None
+
+    def test_static_plate_in_set_up_or_factorisation(self):
+        for sig in (signal.SIGTERM, signal.SIGINT):
+            out = self.path(f"plate-{int(sig)}")
+            self.check(["run", os.path.join(SCENES, "plate-3clamped.yaml"), "-o", out],
+                       0.05, 2.5, os.path.join(out, "summary.json"), sig)
+
+    def test_adr_beam(self):
+        with open(os.path.join(SCENES, "clamped-beam.yaml")) as f:
+            text = f.read().replace("integrator: static", "integrator: adr")
+        scene = self.scene(name="clamped-beam-adr.yaml", text=text)
+        for sig in (signal.SIGTERM, signal.SIGHUP):
+            out = self.path(f"adr-{int(sig)}")
+            self.check(["run", scene, "-o", out], 0.05, 2.0, os.path.join(out, "summary.json"),
+                       sig)
+
+    def test_verify_marks_nothing_failed(self):
+        out = self.path("verify")
+        s = self.check(["verify", "clamped-beam-fast", "cantilever-fast", "-o", out], 0.05, 1.5,
+                       os.path.join(out, "summary.json"), signal.SIGINT)
+        statuses = [c["status"] for c in s["cases"]]
+        self.assertNotIn("failed", statuses)
+        self.assertEqual(statuses[-1], "interrupted")
+
+    def test_bench(self):
+        self.check(["bench", os.path.join(SCENES, "model-a-benchmark.yaml"), "--steps", "100000",
+                    "--repeats", "1"], 0.05, 2.0, None)
+
+
+if __name__ == "__main__":
+    pdcli.main()
