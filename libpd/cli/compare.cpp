@@ -3,6 +3,7 @@
 // verification/studies/integrator_comparison.hpp; this file only parses and prints.
 #include "commands.hpp"
 #include "integrator_comparison.hpp"
+#include "case_folders.hpp"
 #include "verification.hpp"
 
 #include <cstdio>
@@ -22,7 +23,7 @@ struct CompareArgs {
 
 int compare(const CompareArgs& a) {
   set_threads(a.threads);
-  const std::filesystem::path dir = a.scenes_dir.empty() ? verification::default_scenes_dir()
+  const std::filesystem::path dir = a.scenes_dir.empty() ? verification::default_cases_dir()
                                                          : std::filesystem::path(a.scenes_dir);
   std::ofstream out;
   if (!a.out_file.empty()) {
@@ -67,7 +68,8 @@ Command add_compare_command(CLI::App& app) {
       ->required()
       ->check(CLI::IsMember({"dynamic", "quasistatic"}));
   cmd->add_option("-o,--output", a->out_file, "also write the rows to this .jsonl file");
-  cmd->add_option("--scenes", a->scenes_dir, "folder with the shipped scenes");
+  cmd->add_option("--scenes", a->scenes_dir,
+                  "folder of the case folders (bar-vibration/, clamped-beam/)");
   cmd->add_flag("--quick", a->quick,
                 "dynamic: one period and a coarser reference; quasistatic: twice the spacing, "
                 "no adaptive Dormand–Prince");
