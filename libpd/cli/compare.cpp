@@ -1,9 +1,9 @@
 // pd compare dynamic|quasistatic [-o FILE] [--scenes DIR] [--quick] [--threads N]
 // Integrator comparison rows (JSON lines on stdout and, with -o, in FILE). The study itself is
 // verification/studies/integrator_comparison.hpp; this file only parses and prints.
+#include "case_folders.hpp"
 #include "commands.hpp"
 #include "integrator_comparison.hpp"
-#include "case_folders.hpp"
 #include "verification.hpp"
 
 #include <cstdio>

@@ -73,8 +73,7 @@ int verify_scenes(const VerifyArgs& a, const verification::Context& ctx) {
 }
 
 /// Run one case, write its JSON and say whether its gate passed.
-bool run_case(const verification::Case& c, verification::Context ctx,
-              const std::string& out_dir) {
+bool run_case(const verification::Case& c, verification::Context ctx, const std::string& out_dir) {
   fmt::print("== {} — {}\n", c.name, c.summary);
   std::fflush(stdout);
   ctx.folder = c.folder->path;
@@ -100,8 +99,7 @@ int verify(const VerifyArgs& a) {
   ctx.output_dir = a.out_dir;
   ctx.quick = a.quick;
   ctx.progress = ::isatty(STDERR_FILENO) != 0;
-  if (!a.list && !a.cases.empty() &&
-      std::all_of(a.cases.begin(), a.cases.end(), is_scene_file)) {
+  if (!a.list && !a.cases.empty() && std::all_of(a.cases.begin(), a.cases.end(), is_scene_file)) {
     VerifyArgs scene_args = a;
     if (a.fe_levels > 0) {
       scene_args.scene.fe_levels = a.fe_levels;

@@ -358,7 +358,8 @@ TEST(ResourceGuardCli, InfoRefusesAGigabyteScene) {
 
 TEST(ResourceGuardCli, RunReportsATruncatedScene) {
   // The shipped patch test cut inside the materials section.
-  const std::string shipped = read(fs::path(PD_SCENES_DIR) / ".." / "cases" / "patch-test" / "patch-test.yaml");
+  const std::string shipped =
+      read(fs::path(PD_SCENES_DIR) / ".." / "cases" / "patch-test" / "patch-test.yaml");
   const auto cut = shipped.find("    density:");
   ASSERT_NE(cut, std::string::npos);
   const fs::path p = write_scene("truncated.yaml", shipped.substr(0, cut) + "    density: [1,");

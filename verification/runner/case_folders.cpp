@@ -61,8 +61,8 @@ RunInfo read_run(const YAML::Node& r, const std::string& kind, const std::filesy
   run.label = required<std::string>(r, "label", file, where);
   run.cpu_seconds = required<double>(r, "cpu_seconds", file, where);
   // label `none`: no ctest test (a sweep the report runs), so no ctest timeout either.
-  run.timeout = run.label == "none" ? r["timeout"].as<int>(0)
-                                    : required<int>(r, "timeout", file, where);
+  run.timeout =
+      run.label == "none" ? r["timeout"].as<int>(0) : required<int>(r, "timeout", file, where);
   run.gate = required<std::string>(r, "gate", file, where);
   if (r["threads"]) {
     run.threads = r["threads"].as<int>();

@@ -18,16 +18,16 @@ namespace pd::verification {
 /// One `runs:` entry of a case.yaml: one `pd verify NAME`.
 struct RunInfo {
   std::string name;
-  std::string summary;              ///< what `pd verify --list` prints
+  std::string summary; ///< what `pd verify --list` prints
   std::string label; ///< ctest label: verification (default run), verification-full; none: no test
-  double cpu_seconds = 0;           ///< expected CPU seconds (the report's estimate)
-  std::optional<int> threads;       ///< OMP_NUM_THREADS of its ctest run; none: ctest's own
-  int timeout = 0;                  ///< ctest TIMEOUT in seconds
-  std::string reference_kind;       ///< what the report's scorecard calls the reference
-  std::string gate;                 ///< the gate in words
-  std::string scene;                ///< kind scene: the scene file, relative to the folder
-  double tolerance = 0;             ///< kind scene: the relative gate (pd verify SCENE --gate)
-  std::optional<int> fe_levels;     ///< kind scene: pd-fem --levels
+  double cpu_seconds = 0;       ///< expected CPU seconds (the report's estimate)
+  std::optional<int> threads;   ///< OMP_NUM_THREADS of its ctest run; none: ctest's own
+  int timeout = 0;              ///< ctest TIMEOUT in seconds
+  std::string reference_kind;   ///< what the report's scorecard calls the reference
+  std::string gate;             ///< the gate in words
+  std::string scene;            ///< kind scene: the scene file, relative to the folder
+  double tolerance = 0;         ///< kind scene: the relative gate (pd verify SCENE --gate)
+  std::optional<int> fe_levels; ///< kind scene: pd-fem --levels
 };
 
 struct CaseFolder {

@@ -1,9 +1,9 @@
 // Linear-elastic structures of Miranda et al. 2019 §5.1 (clamped beam, cantilever, plate with three
 // edges clamped) against the deal.II reference of the same continuum and against beam/plate theory.
 //
-// Each case is data: the case.yaml of a case folder of kind `structure` names the scene, the FE reference, the
-// quantities (points) and deflection lines, the gates and a coarse CI variant. This file turns such
-// a description into runs and a case JSON.
+// Each case is data: the case.yaml of a case folder of kind `structure` names the scene, the FE
+// reference, the quantities (points) and deflection lines, the gates and a coarse CI variant. This
+// file turns such a description into runs and a case JSON.
 //
 // Where PD is evaluated: particles sit at cell centres, so a point such as the beam's centre line
 // (y = b/2, z = h/2) or the plate's free edge (y = 3 m) generally lies between particle layers or
@@ -18,6 +18,7 @@
 // the tight tolerance vs FE); a static-solver scene reports its solve's residual instead (the
 // rerun would be the same solve).
 #include "structures.hpp"
+
 #include "libpd/app/run.hpp"
 #include "libpd/discretisation/corrections.hpp"
 #include "libpd/io/scene.hpp"
@@ -379,7 +380,7 @@ Json section_json(const SectionStiffness& s) {
   j["section_particles"] = s.section_particles;
   j["meaning"] = "PD / continuum stiffness of the infinitely long section under uniform "
                  "curvature, shear and axial strain, transverse displacements relaxed "
-                 "(verification/cases/section_stiffness.hpp); supports, load and ends excluded";
+                 "(verification/runner/section_stiffness.hpp); supports, load and ends excluded";
   return j;
 }
 

@@ -12,8 +12,8 @@
 
 #include "libpd/app/run.hpp"
 #include "libpd/app/run_options.hpp"
-#include "libpd/io/scene.hpp"
 #include "libpd/io/output.hpp"
+#include "libpd/io/scene.hpp"
 
 #include <chrono>
 #include <filesystem>
@@ -31,7 +31,7 @@ struct Context {
   std::filesystem::path folder;     ///< the case's folder: its case.yaml and its scenes
   const CaseFolder* case_folder = nullptr; ///< the folder's parsed case.yaml
   const RunInfo* run = nullptr;            ///< this run's entry in it
-  std::filesystem::path output_dir; ///< where CASE.json and run outputs go
+  std::filesystem::path output_dir;        ///< where CASE.json and run outputs go
   bool progress = false;
   /// The default report's extent (pd verify --quick): sweeps run their case file's
   /// `quick_sweep:` lists where it has them, and rc-beam leaves out its s0 sensitivity runs.
@@ -51,10 +51,10 @@ struct RunRegistrar {
 #define PD_VERIFICATION_CONCAT_(a, b) a##b
 #define PD_VERIFICATION_CONCAT(a, b) PD_VERIFICATION_CONCAT_(a, b)
 /// Registers `function` as the run NAME of the case folder whose case.yaml lists it.
-#define PD_VERIFICATION_RUN(name, function)                                                       \
-  static const ::pd::verification::RunRegistrar PD_VERIFICATION_CONCAT(pd_verification_run_,      \
-                                                                       __LINE__) {                \
-    name, function                                                                                \
+#define PD_VERIFICATION_RUN(name, function)                                                        \
+  static const ::pd::verification::RunRegistrar PD_VERIFICATION_CONCAT(pd_verification_run_,       \
+                                                                       __LINE__) {                 \
+    name, function                                                                                 \
   }
 
 /// Run options for a case's run into its own folder ctx.output_dir/name (overwrite), without VTU

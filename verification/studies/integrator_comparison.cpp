@@ -2,11 +2,11 @@
 // steady state.
 #include "integrator_comparison.hpp"
 
-#include "structures.hpp"
 #include "libpd/app/run.hpp"
 #include "libpd/io/scene.hpp"
 #include "libpd/kernel/stable_time_step.hpp"
 #include "libpd/time/stability.hpp"
+#include "structures.hpp"
 #include "verification.hpp"
 
 #include <algorithm>

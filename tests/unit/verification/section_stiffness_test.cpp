@@ -1,4 +1,4 @@
-// Section-stiffness error budget (verification/cases/section_stiffness.hpp): the relaxed stiffness
+// Section-stiffness error budget (verification/runner/section_stiffness.hpp): the relaxed stiffness
 // of a PD cross-section against the continuum it discretises.
 #include "libpd/io/scene.hpp"
 #include "section_stiffness.hpp"

@@ -7,9 +7,9 @@
 //
 // bar-energy: the same bar, undamped velocity Verlet for 10^4 steps at 0.9 × the eq. 31 step;
 // total energy (kinetic + stored) must not drift by more than 1e-4 of its initial value.
-#include "verification.hpp"
 #include "libpd/app/run.hpp"
 #include "libpd/io/scene.hpp"
+#include "verification.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -21,10 +21,10 @@
 //    10 across) and the outer-row lateral strain reads +0.85 %.
 //  * the clamp: a mirror clamp holds the face itself; fixed particle layers would clamp ~0.4 λ
 //    behind it (+0.4 λ / L elongation, see the scene).
-#include "verification.hpp"
 #include "libpd/app/run.hpp"
 #include "libpd/discretisation/corrections.hpp"
 #include "libpd/io/scene.hpp"
+#include "verification.hpp"
 
 #include <array>
 #include <chrono>
@@ -173,9 +173,9 @@ Json gated_block(const Context& ctx, const std::string& name, int particles_acro
   out["case"] = name;
   out["quantity"] = "centre-line u_x at the loaded end and lateral strain at mid-length";
   out["particles_across"] = particles_across;
-  for (const char* key : {"surface_correction", "volume_correction", "spacing", "pd", "reference",
-                          "error", "signed_error", "steady_state", "steps", "setup_seconds",
-                          "run"}) {
+  for (const char* key :
+       {"surface_correction", "volume_correction", "spacing", "pd", "reference", "error",
+        "signed_error", "steady_state", "steps", "setup_seconds", "run"}) {
     out[key] = *r.json.find(key);
   }
   out["gate"] = fmt::format("elongation error <= {:g} %, lateral contraction error <= {:g} %, "

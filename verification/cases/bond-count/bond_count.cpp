@@ -6,9 +6,9 @@
 // signature of comparing round-off-perturbed floating-point distances with δ.
 // Also: bonds per particle in an infinite lattice for δ/λ = 1…8 beside Miranda Table 1, whose
 // values come from the approximation N/M ≈ (2/3)π(δ/λ)³ − 1/2 (eq. 37).
-#include "verification.hpp"
 #include "libpd/discretisation/bond_family.hpp"
 #include "libpd/io/scene.hpp"
+#include "verification.hpp"
 
 #include <cmath>
 #include <fmt/format.h>

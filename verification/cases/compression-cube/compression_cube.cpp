@@ -15,11 +15,11 @@
 // G_F = 73 f_cm^0.18. Bond-based PD with ν = 1/4 makes the compressive strength of a brittle
 // specimen a few times f_ct (lateral stretch ν ε), far below concrete's f_c/f_ct ≈ 15: see
 // QUASI_BRITTLE.md.
-#include "verification.hpp"
 #include "curve_recorder.hpp"
 #include "libpd/io/scene.hpp"
 #include "libpd/physics/material.hpp"
 #include "libpd/time/quasi_static.hpp"
+#include "verification.hpp"
 
 #include <algorithm>
 #include <chrono>

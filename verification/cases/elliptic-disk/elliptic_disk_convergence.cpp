@@ -44,10 +44,10 @@
 //                             relaxation is needed.
 // ADR's steady state (force 1e-7, kinetic 1e-12) is far below the error: 1e-10 / 1e-20 leave
 // every RMS of elliptic-disk unchanged in 4 digits.
-#include "verification.hpp"
 #include "elliptic_disk.hpp"
 #include "libpd/app/run.hpp"
 #include "observed_order.hpp"
+#include "verification.hpp"
 
 #include <cmath>
 #include <cstdio>

@@ -2,7 +2,7 @@
 // the failure stress of the virtual-fibre model against Griffith's theory.
 //
 // The body is the paper's elliptical disk (eq. 114) with a crack between its focal points x = ±c,
-// as cases/elliptic_disk.hpp builds it: graded particles (finest at the tips), plane strain, steel
+// as runner/elliptic_disk.hpp builds it: graded particles (finest at the tips), plane strain, steel
 // of Table 1 with elastic–perfectly plastic arms (eq. 111, ε_y = 1/500) that fail once their
 // plastic elongation exceeds δ_e (eq. 118). The load is the paper's (§10.3): the particles of a
 // boundary zone, the fewest outer rings of zones that complete every free particle's horizon, are
@@ -60,12 +60,12 @@
 // relaxed moduli: at δ_e = c/1500 it moved 10 % from c/32 to c/64 and 1.5 % to c/96); at c/3250
 // (zone ≈ 0.07 c, horizon 0.16 c … 0.05 c) it still rises with refinement. Numbers and commands:
 // verification/cases/GRIFFITH.md.
-#include "verification.hpp"
 #include "curve_recorder.hpp"
 #include "elliptic_disk.hpp"
 #include "libpd/io/scene.hpp"
 #include "libpd/time/quasi_static.hpp"
 #include "line_fit.hpp"
+#include "verification.hpp"
 
 #include <algorithm>
 #include <array>

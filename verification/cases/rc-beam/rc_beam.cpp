@@ -19,11 +19,11 @@
 // particles; the case must finish in ≤ 6 min on 2 threads, so the s0 sensitivity runs (0.8 s0,
 // 1.2 s0) stop once the load has fallen 30 % below the peak. See QUASI_BRITTLE.md for the
 // geometry (the paper's Figure 16 is not in our text), the derivation of s0 and the numbers.
-#include "verification.hpp"
 #include "curve_recorder.hpp"
 #include "libpd/io/scene.hpp"
 #include "libpd/physics/material.hpp"
 #include "libpd/time/quasi_static.hpp"
+#include "verification.hpp"
 
 #include <algorithm>
 #include <chrono>

@@ -52,14 +52,18 @@ Json run_symmetry_half_full(const Context& ctx) {
   out["quantity"] = "half model on a symmetry plane / full model − 1, per probe";
   double worst = 0;
   out["plate-3clamped"] = compare_half_full(
-      run_probes(ctx, ctx.folder / "../plate-3clamped/plate-3clamped.yaml", "symmetry-half-full/full"),
-      run_probes(ctx, ctx.scenes_dir / "user/plate-3clamped-half.yaml", "symmetry-half-full/half"), worst);
+      run_probes(ctx, ctx.folder / "../plate-3clamped/plate-3clamped.yaml",
+                 "symmetry-half-full/full"),
+      run_probes(ctx, ctx.scenes_dir / "user/plate-3clamped-half.yaml", "symmetry-half-full/half"),
+      worst);
   out["largest_difference"] = worst;
   double hole_worst = 0;
-  out["plate-hole-clamped (reported, not gated)"] = compare_half_full(
-      run_probes(ctx, ctx.scenes_dir / "user/plate-hole-clamped.yaml", "symmetry-half-full/hole-full"),
-      run_probes(ctx, ctx.scenes_dir / "user/plate-hole-clamped-half.yaml", "symmetry-half-full/hole-half"),
-      hole_worst);
+  out["plate-hole-clamped (reported, not gated)"] =
+      compare_half_full(run_probes(ctx, ctx.scenes_dir / "user/plate-hole-clamped.yaml",
+                                   "symmetry-half-full/hole-full"),
+                        run_probes(ctx, ctx.scenes_dir / "user/plate-hole-clamped-half.yaml",
+                                   "symmetry-half-full/hole-half"),
+                        hole_worst);
   out["hole_largest_difference"] = hole_worst;
   finish_case(out, "plate-3clamped: every probe of the half model within 0.1 % of the full model",
               worst <= 1e-3, start);
