@@ -380,7 +380,7 @@ Json section_json(const SectionStiffness& s) {
   j["section_particles"] = s.section_particles;
   j["meaning"] = "PD / continuum stiffness of the infinitely long section under uniform "
                  "curvature, shear and axial strain, transverse displacements relaxed "
-                 "(verification/runner/section_stiffness.hpp); supports, load and ends excluded";
+                 "(verification/cases/section_stiffness.hpp); supports, load and ends excluded";
   return j;
 }
 
