@@ -1,6 +1,7 @@
 // pd compare dynamic|quasistatic [-o FILE] [--scenes DIR] [--quick] [--threads N]
 // Integrator comparison rows (JSON lines on stdout and, with -o, in FILE). The study itself is
 // verification/studies/integrator_comparison.hpp; this file only parses and prints.
+#include "case_folders.hpp"
 #include "commands.hpp"
 #include "integrator_comparison.hpp"
 #include "verification.hpp"
@@ -23,7 +24,7 @@ struct CompareArgs {
 int compare(const CompareArgs& a) {
   const StopOnInterrupt stop("compare");
   set_threads(a.threads);
-  const std::filesystem::path dir = a.scenes_dir.empty() ? verification::default_scenes_dir()
+  const std::filesystem::path dir = a.scenes_dir.empty() ? verification::default_cases_dir()
                                                          : std::filesystem::path(a.scenes_dir);
   std::ofstream out;
   if (!a.out_file.empty()) {
@@ -68,7 +69,8 @@ Command add_compare_command(CLI::App& app) {
       ->required()
       ->check(CLI::IsMember({"dynamic", "quasistatic"}));
   cmd->add_option("-o,--output", a->out_file, "also write the rows to this .jsonl file");
-  cmd->add_option("--scenes", a->scenes_dir, "folder with the shipped scenes");
+  cmd->add_option("--scenes", a->scenes_dir,
+                  "folder of the case folders (bar-vibration/, clamped-beam/)");
   cmd->add_flag("--quick", a->quick,
                 "dynamic: one period and a coarser reference; quasistatic: twice the spacing, "
                 "no adaptive Dormand–Prince");

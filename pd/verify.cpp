@@ -1,7 +1,9 @@
-// pd verify [CASE...] [-o DIR] [--list] [--sweep [--quick]] [--scenes DIR] [--threads N]
+// pd verify [CASE...] [-o DIR] [--list [--json]] [--sweep [--quick]] [--scenes DIR] [--threads N]
 // pd verify SCENE.yaml... [--fe-levels N] [--fe-coarse] [--gate FRACTION]
 // Verification cases with their gates: CASE.json in DIR for each, exit code 2 if a gate fails.
 // A scene file instead of a case name runs the scene beside its FE reference (pd-fem --scene).
+// The cases are the folders of verification/cases (or $PD_CASES_DIR), read at run time.
+#include "case_folders.hpp"
 #include "commands.hpp"
 #include "libpd/core/atomic_file.hpp"
 #include "libpd/io/scene.hpp"
@@ -33,6 +35,7 @@ struct VerifyArgs {
   std::vector<std::string> cases;
   std::string out_dir = "verification-out";
   bool list = false;
+  bool json = false;
   bool sweep = false;
   bool quick = false;
   std::string scenes_dir;
@@ -159,10 +162,13 @@ int verify_scenes(const VerifyArgs& a, const verification::Context& ctx) {
 
 /// Run one case, write its JSON and say whether its gate passed; nothing if a stop request
 /// came while it ran (its runs ended early, so its numbers are not its result).
-std::optional<bool> run_case(const verification::Case& c, const verification::Context& ctx,
+std::optional<bool> run_case(const verification::Case& c, verification::Context ctx,
                              const std::string& out_dir, const InterruptGuard& interrupt) {
   fmt::print("== {} — {}\n", c.name, c.summary);
   std::fflush(stdout);
+  ctx.folder = c.folder->path;
+  ctx.case_folder = c.folder;
+  ctx.run = c.info;
   const auto t0 = std::chrono::steady_clock::now();
   Json result = c.run(ctx);
   if (interrupt.requested()) {
@@ -181,20 +187,13 @@ std::optional<bool> run_case(const verification::Case& c, const verification::Co
 
 int verify(const VerifyArgs& a) {
   set_threads(a.threads);
-  const auto& cases = verification::all_cases();
-  if (a.list) {
-    for (const auto& c : cases) {
-      fmt::print("{:<20} {}\n", c.name, c.summary);
-    }
-    return 0;
-  }
   verification::Context ctx;
   ctx.scenes_dir = a.scenes_dir.empty() ? verification::default_scenes_dir()
                                         : std::filesystem::path(a.scenes_dir);
   ctx.output_dir = a.out_dir;
   ctx.quick = a.quick;
   ctx.progress = ::isatty(STDERR_FILENO) != 0;
-  if (!a.cases.empty() && std::all_of(a.cases.begin(), a.cases.end(), is_scene_file)) {
+  if (!a.list && !a.cases.empty() && std::all_of(a.cases.begin(), a.cases.end(), is_scene_file)) {
     VerifyArgs scene_args = a;
     if (a.fe_levels > 0) {
       scene_args.scene.fe_levels = a.fe_levels;
@@ -203,6 +202,18 @@ int verify(const VerifyArgs& a) {
       scene_args.scene.gate = a.gate;
     }
     return verify_scenes(scene_args, ctx);
+  }
+  const verification::CaseSet set = verification::discover_cases(verification::default_cases_dir());
+  const auto& cases = set.cases;
+  if (a.list && a.json) {
+    fmt::print("{}\n", verification::cases_json(set).dump());
+    return 0;
+  }
+  if (a.list) {
+    for (const auto& c : cases) {
+      fmt::print("{:<20} {}\n", c.name, c.summary);
+    }
+    return 0;
   }
   const InterruptGuard interrupt(true);
   std::vector<const verification::Case*> selected;
@@ -248,6 +259,8 @@ Command add_verify_command(CLI::App& app) {
                   "case names (default: all), or scene files (.yaml) to verify against FE");
   cmd->add_option("-o,--output", a->out_dir, "output folder")->capture_default_str();
   cmd->add_flag("--list", a->list, "list the cases");
+  cmd->add_flag("--json", a->json,
+                "with --list: a JSON array, one object per case with its folder and metadata");
   cmd->add_flag("--quick", a->quick,
                 "the default report's extent: with --sweep the case file's quick_sweep lists "
                 "where it has them; rc-beam without its s0 sensitivity runs");

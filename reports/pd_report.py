@@ -65,8 +65,9 @@ ROOT = HERE.parent
 # min). The default report sweeps the three structures with their case files' `quick_sweep:`
 # lists (`pd verify --sweep --quick`); --full runs every case file's complete `sweep:`.
 DEFAULT_SWEEP_CASES = ["clamped-beam", "cantilever", "plate-3clamped"]
-DEFAULT_STABILITY_SCENES = ["bar-vibration.yaml"]
-FULL_STABILITY_SCENES = ["bar-vibration.yaml", "clamped-beam.yaml", "plate-3clamped.yaml"]
+DEFAULT_STABILITY_SCENES = ["bar-vibration/bar-vibration.yaml"]
+FULL_STABILITY_SCENES = ["bar-vibration/bar-vibration.yaml", "clamped-beam/clamped-beam.yaml",
+                         "plate-3clamped/plate-3clamped.yaml"]   # in verification/cases
 # One ARKode table per order (2 to 5), one of them with β = 0 (Heun–Euler) and one measured past
 # β (Dormand–Prince): the 6- and 7-stage Cash–Karp and Fehlberg alone took 20 of the stage's 49 s.
 # --full measures every table.
@@ -373,7 +374,7 @@ def main(argv: list[str] | None = None) -> int:
                 [(st.name, st.parallel, records[st.name].get("cpu_seconds") or 0.0) for st in ran],
                 a.jobs, os.cpu_count() or 1),
             "stage_cached": {n: bool(r.get("cached")) for n, r in records.items()},
-            "cases": CASES}
+            "cases": CASES, "case_metadata": list(S.CASE_METADATA.values())}
     data = ctx.out / "data"
     write_json(data / "_environment.json", env)
     write_json(data / "_meta.json", meta)

@@ -34,10 +34,11 @@ sys.path.insert(0, str(ROOT / "reports"))
 from pdreport.stages import parse_json_output  # noqa: E402
 
 SCENES = ROOT / "verification" / "scenes"
+CASE_FOLDERS = ROOT / "verification" / "cases"
 CASES = ["bond-count", "bar-vibration", "bar-energy", "block-tension", "clamped-beam-fast",
          "cantilever-fast", "plate-3clamped-fast"]
-SECTION_SCENES = [("clamped-beam.yaml", []), ("cantilever.yaml", []),
-                  ("plate-3clamped.yaml", ["--plate"])]
+SECTION_SCENES = [("clamped-beam/clamped-beam.yaml", []), ("cantilever/cantilever.yaml", []),
+                  ("plate-3clamped/plate-3clamped.yaml", ["--plate"])]
 # The checkpoint variants of tests/checkpoint/kill_restart_test.py (damped-euler, verlet and adr
 # with bonds breaking, arkode rk4), each run whole and as half a run plus a restart.
 CHECKPOINT_TEST = ROOT / "tests" / "checkpoint" / "kill_restart_test.py"
@@ -123,14 +124,17 @@ def take(build: Path, out: Path) -> int:
                    json.loads(f.read_text()) if f.exists() else {"exit": r.returncode})
         print(f"verify {case}: exit {r.returncode}", flush=True)
 
-    for scene in sorted(SCENES.glob("*.yaml")):
+    # The shared scenes and the case folders' (not their case.yaml), by file name.
+    shipped = list(SCENES.glob("*.yaml")) + [p for p in CASE_FOLDERS.glob("*/*.yaml")
+                                              if p.name != "case.yaml"]
+    for scene in sorted(shipped, key=lambda p: p.name):
         r = run([pd, "info", str(scene), "--json"])
         value = json.loads(r.stdout) if r.returncode == 0 else {"exit": r.returncode,
                                                                "stderr": r.stderr}
         write_json(out / f"info-{scene.stem}.json", value)
 
     for name, extra in SECTION_SCENES:
-        r = run([pd, "section", str(SCENES / name), "--all-pairs", "--json", *extra])
+        r = run([pd, "section", str(CASE_FOLDERS / name), "--all-pairs", "--json", *extra])
         write_json(out / f"section-{Path(name).stem}.json",
                    {"exit": r.returncode, "rows": json_lines(r.stdout)})
 
@@ -150,7 +154,7 @@ def take(build: Path, out: Path) -> int:
         print(f"run {variant}: exit {r1.returncode} {r2.returncode} {r3.returncode}", flush=True)
         failures += r1.returncode != 0
 
-    r = run([pd, "stability", str(SCENES / "bar-vibration.yaml"), "--steps", "200", "--json",
+    r = run([pd, "stability", str(CASE_FOLDERS / "bar-vibration" / "bar-vibration.yaml"), "--steps", "200", "--json",
              "--threads", "1"])
     write_json(out / "stability-bar.json", {"exit": r.returncode, "rows": json_lines(r.stdout)})
     shutil.rmtree(work)

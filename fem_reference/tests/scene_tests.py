@@ -5,7 +5,7 @@ path (the .prm solver), never against stored numbers.
     scene_tests.py CASE --pd-fem BIN --source FEM_REFERENCE_DIR --work DIR
 
 CASE
-  cantilever  verification/scenes/cantilever.yaml (3 levels) against prm/cantilever.prm
+  cantilever  verification/cases/cantilever/cantilever.yaml (3 levels) against prm/cantilever.prm
               (3 levels) evaluated at the four particles the scene's tip probe averages over:
               the extrapolated values must agree within 1.5 x the sum of both error estimates
               (the scene loads the top particle layer as a body force, the .prm the top face
@@ -62,7 +62,7 @@ def check(ok, what):
 def cantilever(args):
     repo = args.source.parent
     out = args.work / "scene-cantilever"
-    run([args.pd_fem, "--scene", repo / "verification/scenes/cantilever.yaml", "--coarse",
+    run([args.pd_fem, "--scene", repo / "verification/cases/cantilever/cantilever.yaml", "--coarse",
          "-o", out])
     scene = probe(fe_json(out / "fe.json"), "tip_deflection")
 

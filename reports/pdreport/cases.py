@@ -1,5 +1,5 @@
-"""The structure cases as verification/cases/NAME.case.yaml describes them: the files the C++
-runner (verification/cases/structures.cpp) reads, read here too so the report restates none of
+"""The structure cases as their folders' verification/cases/NAME/case.yaml describe them (kind
+`structure`): the files the C++ runner (verification/runner/structures.cpp) reads, read here too so the report restates none of
 their facts (FE line files, line axes, quantity points, the paper's agreement level and figures)."""
 from __future__ import annotations
 
@@ -63,12 +63,15 @@ def _case(d: dict, path: Path) -> Case:
 
 
 def load(cases_dir: Path = CASES_DIR) -> dict[str, Case]:
-    """Every NAME.case.yaml, by case name, in file-name order."""
+    """Every case folder of kind `structure`, by case name, in folder-name order."""
     import yaml   # only here: `pd_report.py --compare` must run without PyYAML
 
     out = {}
-    for f in sorted(cases_dir.glob("*.case.yaml")):
-        c = _case(yaml.safe_load(f.read_text()), f)
+    for f in sorted(cases_dir.glob("*/case.yaml")):
+        d = yaml.safe_load(f.read_text())
+        if d.get("kind") != "structure":
+            continue
+        c = _case(d, f)
         out[c.name] = c
     return out
 

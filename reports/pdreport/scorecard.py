@@ -15,10 +15,9 @@ from .page import Page
 # measures the elongation as the loaded end's displacement, the contraction as a lateral strain).
 VALUE_KEY = {"elongation": "end_displacement", "lateral_contraction": "lateral_strain"}
 
-# What a case's reference is, where the error key does not say it (`..._vs_fe`, `..._vs_paper`).
-REFERENCE_KIND = {"bar-vibration": "analytical (modal series)", "bar-energy": "conservation",
-                  "block-tension": "analytical (σ/E)", "bond-count": "paper (Miranda)",
-                  "patch-test": "classical energy", "compression-cube": "paper", "rc-beam": "paper"}
+# What a case's reference is, where the error key does not say it (`..._vs_fe`, `..._vs_paper`):
+# each run's `reference_kind` in its case.yaml, from the meta's `pd verify --list --json` (entries()).
+REFERENCE_KIND: dict[str, str] = {}
 KIND_OF_SUFFIX = {"fe": "FE (deal.II)", "paper": "paper", "ec2": "Eurocode 2",
                   "timoshenko": "analytical (Timoshenko)", "kirchhoff": "analytical (Kirchhoff)"}
 
@@ -50,6 +49,9 @@ class Entry:
 def entries(page: Page) -> list[Entry]:
     verify = page.group("verify")
     meta_summary = dict((c, t) for c, t in page.meta.get("cases", []))
+    REFERENCE_KIND.clear()
+    REFERENCE_KIND.update((r["name"], r["reference_kind"]) for r in page.meta.get("case_metadata", [])
+                          if r.get("reference_kind"))
     out = []
     for case in R.listed_cases(page.rec, page.meta):
         rec = verify.get(f"verify:{case}")

@@ -233,7 +233,7 @@ def read_line_csv(path: Path) -> dict:
 
 def scene_inputs(ctx: Ctx) -> list[Path]:
     v = ctx.root / "verification"
-    files = sorted((v / "scenes").glob("*.yaml")) + sorted((v / "cases").glob("*.case.yaml"))
+    files = sorted((v / "scenes").glob("*.yaml")) + sorted((v / "cases").glob("*/*.yaml"))
     files += sorted((ctx.root / "fem_reference" / "reference").glob("*"))
     return files
 
@@ -315,24 +315,22 @@ def fem_stage(ctx: Ctx, problem: str, cases: list[Case]) -> Stage:
 
 # ---- verification cases ------------------------------------------------------------------------
 
+# Each run's entry in its case folder's case.yaml, as `pd verify --list --json` gives it (name,
+# summary, folder, kind, label, cpu_seconds, threads, timeout, reference_kind, gate), by name.
+CASE_METADATA: dict[str, dict] = {}
+
+
 def list_cases(ctx: Ctx) -> list[tuple[str, str]]:
-    p = run(ctx, [str(ctx.pd), "verify", "--list"], "verify-list")
-    cases = []
-    for line in p.stdout.splitlines():
-        m = re.match(r"^(\S+)\s+(.*)$", line.strip())
-        if m:
-            cases.append((m.group(1), m.group(2)))
-    if not cases:
-        raise StageFailed("`pd verify --list` listed no cases")
-    return cases
-
-
-# Seconds of one core per case (CPU seconds measured 2026-11-27; the driver also starts the
-# longest first, so these order a fresh run before durations.json exists).
-VERIFY_SECONDS = {"bond-count": 2, "bar-vibration": 4, "bar-energy": 2, "block-tension": 5,
-                  "clamped-beam": 5, "cantilever": 5, "plate-3clamped": 25, "patch-test": 4,
-                  "rc-beam": 65, "symmetry-half-full": 35, "poisson-control": 22,
-                  "compression-cube": 20, "crack-opening": 15}
+    p = run(ctx, [str(ctx.pd), "verify", "--list", "--json"], "verify-list")
+    try:
+        rows = json.loads(p.stdout)
+    except json.JSONDecodeError as e:
+        raise StageFailed(f"`pd verify --list --json` printed no JSON: {e}")
+    if not rows:
+        raise StageFailed("`pd verify --list --json` listed no cases")
+    CASE_METADATA.clear()
+    CASE_METADATA.update((r["name"], r) for r in rows)
+    return [(r["name"], r["summary"]) for r in rows]
 
 
 def verify_stage(ctx: Ctx, case: str, summary: str) -> Stage:
@@ -355,7 +353,7 @@ def verify_stage(ctx: Ctx, case: str, summary: str) -> Stage:
 
     return Stage(f"verify:{case}", "verify", f"pd verify {case}", [cmd],
                  [ctx.pd] + scene_inputs(ctx), fn,
-                 default_seconds=VERIFY_SECONDS.get(case, 20 if case.endswith("-fast") else 60),
+                 default_seconds=CASE_METADATA.get(case, {}).get("cpu_seconds", 60),
                  parallel=True)
 
 
@@ -395,29 +393,26 @@ def scene_stage(ctx: Ctx, scene: Path) -> Stage:
 # ---- sweeps ------------------------------------------------------------------------------------
 
 def quick_sweep_tree(ctx: Ctx, case: str) -> Path:
-    """A copy of verification/{scenes,cases} whose CASE.case.yaml keeps only the first value of each
+    """A copy of verification/cases whose CASE folder's case.yaml keeps only the first value of each
     `sweep:` list (the default report's reduced sweep; --full runs the case file as it is)."""
     tree = ctx.work / "sweep-quick-tree"
     if tree.exists():
         shutil.rmtree(tree)
-    (tree / "cases").mkdir(parents=True)
-    shutil.copytree(ctx.root / "verification" / "scenes", tree / "scenes")
-    for f in (ctx.root / "verification" / "cases").glob("*.case.yaml"):
-        text = f.read_text()
-        if f.name == f"{case}.case.yaml":
-            out, in_sweep = [], False
-            for line in text.splitlines():
-                if re.match(r"^sweep:", line):
-                    in_sweep = True
-                elif in_sweep and re.match(r"^\S", line):
-                    in_sweep = False
-                m = re.match(r"^(\s+\w+:\s*)\[([^\]]*)\](.*)$", line) if in_sweep else None
-                if m:
-                    first = m.group(2).split(",")[0].strip()
-                    line = f"{m.group(1)}[{first}]   # reduced by the report (default mode)"
-                out.append(line)
-            text = "\n".join(out) + "\n"
-        (tree / "cases" / f.name).write_text(text)
+    shutil.copytree(ctx.root / "verification" / "cases", tree / "cases")
+    f = tree / "cases" / case / "case.yaml"
+    if f.exists():
+        out, in_sweep = [], False
+        for line in f.read_text().splitlines():
+            if re.match(r"^sweep:", line):
+                in_sweep = True
+            elif in_sweep and re.match(r"^\S", line):
+                in_sweep = False
+            m = re.match(r"^(\s+\w+:\s*)\[([^\]]*)\](.*)$", line) if in_sweep else None
+            if m:
+                first = m.group(2).split(",")[0].strip()
+                line = f"{m.group(1)}[{first}]   # reduced by the report (default mode)"
+            out.append(line)
+        f.write_text("\n".join(out) + "\n")
     return tree
 
 
@@ -433,8 +428,6 @@ def sweep_stage(ctx: Ctx, case: str, listed: set[str]) -> Stage:
         quick = False  # pd decides the extent
     elif f"{case}-sweep" in listed:
         cmd = [str(ctx.pd), "verify", f"{case}-sweep", "-o", str(work)]
-        if quick:
-            cmd += ["--scenes", str(ctx.work / "sweep-quick-tree" / "scenes")]
     else:
         cmd = [str(ctx.pd), "verify", "--sweep", case, "-o", str(work)]
 
@@ -447,7 +440,8 @@ def sweep_stage(ctx: Ctx, case: str, listed: set[str]) -> Stage:
         if work.exists():
             shutil.rmtree(work)
         work.mkdir(parents=True)
-        p = run(ctx, cmd, f"sweep-{case}", ok=(0, 2), env=st.env)
+        env = dict(st.env, PD_CASES_DIR=str(ctx.work / "sweep-quick-tree" / "cases")) if quick else st.env
+        p = run(ctx, cmd, f"sweep-{case}", ok=(0, 2), env=env)
         rows: list[dict] = []
         for f in sorted(work.rglob("*.jsonl")):
             rows += read_jsonl(f)
@@ -483,7 +477,7 @@ def sweep_stage(ctx: Ctx, case: str, listed: set[str]) -> Stage:
 
 def stability_stage(ctx: Ctx, scenes: list[str], integrators: list[str]) -> Stage:
     """`integrators` empty: every integrator `pd stability` offers."""
-    paths = [ctx.root / "verification" / "scenes" / s for s in scenes]
+    paths = [ctx.root / "verification" / "cases" / s for s in scenes]
     cmd = [str(ctx.pd), "stability", *map(str, paths), "--json"]
     for name in integrators:
         cmd += ["--integrator", name]
@@ -647,7 +641,7 @@ def peer_stage(ctx: Ctx) -> Stage:
 # Model A sets no correction, so both models hold the same bond family; block-tension takes the
 # library's defaults, under which they do not (`gradient` weights drop the bond-based model's bonds
 # beyond 2λ and its ghosts reach only those; the fibre model keeps the whole horizon).
-FIBRE_BENCH_SCENES = ("verification/scenes/model-a-benchmark.yaml", "verification/scenes/block-tension.yaml")
+FIBRE_BENCH_SCENES = ("verification/scenes/model-a-benchmark.yaml", "verification/cases/block-tension/block-tension.yaml")
 BOND_MODELS = ("micro-elastic", "virtual-fibres")
 
 

@@ -162,7 +162,7 @@ class RunSafety(pdcli.TestCase):
     # displacements had not yet left the bounding box. Instability is found from the energy.
     def test_instability_is_found_from_energy_not_left_as_end_time(self):
         shipped = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..",
-                               "verification", "scenes", "bar-vibration.yaml")
+                               "verification", "cases", "bar-vibration", "bar-vibration.yaml")
         with open(shipped, encoding="utf-8") as f:
             text = f.read()
         limit = float(re.search(r"stable dt \(eq. 31\)\s+(\S+)",

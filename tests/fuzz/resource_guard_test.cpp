@@ -358,7 +358,8 @@ TEST(ResourceGuardCli, InfoRefusesAGigabyteScene) {
 
 TEST(ResourceGuardCli, RunReportsATruncatedScene) {
   // The shipped patch test cut inside the materials section.
-  const std::string shipped = read(fs::path(PD_SCENES_DIR) / "patch-test.yaml");
+  const std::string shipped =
+      read(fs::path(PD_SCENES_DIR) / ".." / "cases" / "patch-test" / "patch-test.yaml");
   const auto cut = shipped.find("    density:");
   ASSERT_NE(cut, std::string::npos);
   const fs::path p = write_scene("truncated.yaml", shipped.substr(0, cut) + "    density: [1,");
@@ -369,7 +370,7 @@ TEST(ResourceGuardCli, RunReportsATruncatedScene) {
 }
 
 TEST(ResourceGuardCli, InfoShowsTheEstimateBesideTheActualNumbers) {
-  const fs::path p = fs::path(PD_SCENES_DIR) / "patch-test.yaml";
+  const fs::path p = fs::path(PD_SCENES_DIR) / ".." / "cases" / "patch-test" / "patch-test.yaml";
   const fs::path out = fs::path(PD_FUZZ_WORK_DIR) / "info.txt";
   const std::string cmd = fmt::format("PD_MEMORY_LIMIT=1G OMP_NUM_THREADS=1 '{}' info '{}' >'{}'",
                                       PD_EXECUTABLE, p.string(), out.string());

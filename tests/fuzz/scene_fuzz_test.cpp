@@ -56,7 +56,17 @@ struct ShippedScene {
 const std::vector<ShippedScene>& shipped_scenes() {
   static const std::vector<ShippedScene> scenes = [] {
     std::vector<ShippedScene> out;
-    for (const auto& entry : fs::directory_iterator(PD_SCENES_DIR)) {
+    std::vector<fs::directory_entry> entries(fs::directory_iterator(PD_SCENES_DIR), {});
+    for (const auto& folder : fs::directory_iterator(PD_CASES_DIR)) {
+      if (folder.is_directory()) { // a case folder: its scenes, not its case.yaml
+        for (const auto& entry : fs::directory_iterator(folder.path())) {
+          if (entry.path().filename() != "case.yaml") {
+            entries.push_back(entry);
+          }
+        }
+      }
+    }
+    for (const auto& entry : entries) {
       if (entry.path().extension() == ".yaml") {
         std::ifstream in(entry.path(), std::ios::binary);
         std::ostringstream text;

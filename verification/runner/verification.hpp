@@ -3,42 +3,73 @@
 //   case, quantity, pd, reference {name: value}, error {name: relative error}, gate, passed,
 //   wall_seconds
 // and `pd verify` exits non-zero when a gate fails.
+//
+// A case is a folder verification/cases/<folder>/ (or under $PD_CASES_DIR): case.yaml describes
+// it and its runs (each one `pd verify NAME`), beside the scenes it runs. The runs of a folder of
+// kind `code` are C++ functions that register themselves with PD_VERIFICATION_RUN; kind
+// `structure` and `scene` folders are data only (case_folders.cpp runs them).
 #pragma once
 
+#include "libpd/app/run.hpp"
 #include "libpd/app/run_options.hpp"
 #include "libpd/io/output.hpp"
+#include "libpd/io/scene.hpp"
 
 #include <chrono>
 #include <filesystem>
-#include <functional>
+#include <map>
 #include <string>
 #include <vector>
 
 namespace pd::verification {
 
+struct CaseFolder;
+struct RunInfo;
+
 struct Context {
-  std::filesystem::path scenes_dir; ///< where the shipped scenes live
-  std::filesystem::path output_dir; ///< where CASE.json and run outputs go
+  std::filesystem::path scenes_dir; ///< shared scenes no case folder owns (verification/scenes)
+  std::filesystem::path folder;     ///< the case's folder: its case.yaml and its scenes
+  const CaseFolder* case_folder = nullptr; ///< the folder's parsed case.yaml
+  const RunInfo* run = nullptr;            ///< this run's entry in it
+  std::filesystem::path output_dir;        ///< where CASE.json and run outputs go
   bool progress = false;
   /// The default report's extent (pd verify --quick): sweeps run their case file's
   /// `quick_sweep:` lists where it has them, and rc-beam leaves out its s0 sensitivity runs.
   bool quick = false;
 };
 
-struct Case {
-  std::string name;
-  std::string summary;
-  /// Returns the case JSON; must set "passed" (bool).
-  std::function<Json(const Context&)> run;
+/// A case's run: returns the case JSON, which must set "passed" (bool).
+using RunFunction = Json (*)(const Context&);
+
+/// The code runs of every linked case folder, by run name (filled by PD_VERIFICATION_RUN).
+std::map<std::string, RunFunction>& registered_runs();
+
+struct RunRegistrar {
+  RunRegistrar(const char* name, RunFunction run);
 };
 
-const std::vector<Case>& all_cases();
+#define PD_VERIFICATION_CONCAT_(a, b) a##b
+#define PD_VERIFICATION_CONCAT(a, b) PD_VERIFICATION_CONCAT_(a, b)
+/// Registers `function` as the run NAME of the case folder whose case.yaml lists it.
+#define PD_VERIFICATION_RUN(name, function)                                                        \
+  static const ::pd::verification::RunRegistrar PD_VERIFICATION_CONCAT(pd_verification_run_,       \
+                                                                       __LINE__) {                 \
+    name, function                                                                                 \
+  }
+
+/// Run options for a case's run into its own folder ctx.output_dir/name (overwrite), without VTU
+/// files: what the cases on a user's scene run.
+RunOutcome run_case_scene(const Context& ctx, const Scene& s, const std::string& run_name);
+
+/// Half the length of the scene's first crack (a segment along x).
+double crack_half_length(const Scene& s);
 
 /// Run options for a case's run into its own folder ctx.output_dir/name: a rerun of the case
 /// replaces its previous run (overwrite), including one written before runs kept a manifest.
 RunOptions case_run_options(const Context& ctx, const std::string& name);
 
-/// Default scenes folder: $PD_SCENES_DIR, else the source tree's verification/scenes.
+/// Default folder of the shared scenes: $PD_SCENES_DIR, else the source tree's
+/// verification/scenes.
 std::filesystem::path default_scenes_dir();
 
 /// Released bar fixed at x = 0, free at x = L, u(x, 0) = εx (bar-vibration): the modal series

@@ -2,11 +2,11 @@
 // steady state.
 #include "integrator_comparison.hpp"
 
-#include "cases.hpp"
 #include "libpd/app/run.hpp"
 #include "libpd/io/scene.hpp"
 #include "libpd/kernel/stable_time_step.hpp"
 #include "libpd/time/stability.hpp"
+#include "structures.hpp"
 #include "verification.hpp"
 
 #include <algorithm>
@@ -148,9 +148,9 @@ std::vector<CompareConfig> quasistatic_configs(bool quick) {
 
 } // namespace
 
-void compare_integrators_dynamic(const std::filesystem::path& scenes_dir, bool quick,
+void compare_integrators_dynamic(const std::filesystem::path& cases_dir, bool quick,
                                  const ComparisonRow& emit) {
-  Scene base = load_scene((scenes_dir / "bar-vibration.yaml").string());
+  Scene base = load_scene((cases_dir / "bar-vibration" / "bar-vibration.yaml").string());
   BodySpec& bar = base.model.bodies.front();
   double length = bar.region.boxes.front().hi[0] - bar.region.boxes.front().lo[0];
   const Material& steel = base.model.materials.front();
@@ -210,9 +210,9 @@ void compare_integrators_dynamic(const std::filesystem::path& scenes_dir, bool q
   }
 }
 
-void compare_integrators_quasistatic(const std::filesystem::path& scenes_dir, bool quick,
+void compare_integrators_quasistatic(const std::filesystem::path& cases_dir, bool quick,
                                      const ComparisonRow& emit) {
-  Scene base = load_scene((scenes_dir / "clamped-beam.yaml").string());
+  Scene base = load_scene((cases_dir / "clamped-beam" / "clamped-beam.yaml").string());
   if (quick) {
     // Twice the paper's spacing: 1,976 instead of 9,328 particles and half the wave transits to
     // relax, so every integrator's row costs about 1/20 (the report's default mode; the relative

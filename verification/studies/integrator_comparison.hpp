@@ -17,11 +17,12 @@ namespace pd::verification {
 /// Receives each row as soon as it is computed (a full comparison takes long).
 using ComparisonRow = std::function<void(const Json&)>;
 
+/// The scenes are the case folders' (cases_dir/bar-vibration/, cases_dir/clamped-beam/).
 /// `quick`: fewer time steps, one ARKode table per order and a coarser reference.
-void compare_integrators_dynamic(const std::filesystem::path& scenes_dir, bool quick,
+void compare_integrators_dynamic(const std::filesystem::path& cases_dir, bool quick,
                                  const ComparisonRow& emit);
 /// `quick`: without adaptive Dormand–Prince, by far the most expensive configuration.
-void compare_integrators_quasistatic(const std::filesystem::path& scenes_dir, bool quick,
+void compare_integrators_quasistatic(const std::filesystem::path& cases_dir, bool quick,
                                      const ComparisonRow& emit);
 
 } // namespace pd::verification

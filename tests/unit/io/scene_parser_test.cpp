@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 #include <sstream>
 #include <string>
+#include <vector>
 
 namespace {
 
@@ -1037,12 +1038,26 @@ TEST(SceneParser, DocumentedExampleParses) {
 }
 
 TEST(SceneParser, ShippedScenesLoad) {
-  int count = 0;
+  // The shared scenes and those of the case folders (each folder's case.yaml is not a scene).
+  std::vector<std::filesystem::path> files;
   for (const auto& entry : std::filesystem::directory_iterator(PD_SCENES_DIR)) {
-    if (entry.path().extension() != ".yaml") {
+    files.push_back(entry.path());
+  }
+  for (const auto& folder : std::filesystem::directory_iterator(PD_CASES_DIR)) {
+    if (folder.is_directory()) {
+      for (const auto& entry : std::filesystem::directory_iterator(folder.path())) {
+        if (entry.path().filename() != "case.yaml") {
+          files.push_back(entry.path());
+        }
+      }
+    }
+  }
+  int count = 0;
+  for (const auto& file : files) {
+    if (file.extension() != ".yaml") {
       continue;
     }
-    const std::string path = entry.path().string();
+    const std::string path = file.string();
     try {
       const pd::Scene s = pd::load_scene(path);
       EXPECT_EQ(s.path, path);

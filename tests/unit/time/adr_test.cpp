@@ -132,7 +132,8 @@ TEST(AdrSlow, ClampedBeamMatchesTheStaticSolve) {
   // steady-state criterion against the static solver's equilibrium (residual 1e-10 of the load).
   // Damped Euler is compared in `pd compare quasistatic`: with the ghosts' 3× smaller stable step
   // it needed 250 s here, which the default test run cannot afford.
-  const pd::Scene scene = pd::load_scene(std::string(PD_SCENES_DIR) + "/clamped-beam.yaml");
+  const pd::Scene scene =
+      pd::load_scene(std::string(PD_CASES_DIR) + "/clamped-beam/clamped-beam.yaml");
   ASSERT_EQ(scene.solver.integrator, pd::IntegratorKind::static_solve);
   pd::RunOptions opt;
   opt.stop_on_interrupt = false;

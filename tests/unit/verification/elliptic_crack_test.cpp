@@ -1,4 +1,4 @@
-// Eq. 116 of Olsson et al. (verification/cases/elliptic_crack.hpp) against the two limits the
+// Eq. 116 of Olsson et al. (verification/runner/elliptic_crack.hpp) against the two limits the
 // elliptical-disk cases lean on: Griffith's crack opening on ξ = 0 and the uniform equibiaxial
 // strain far from the crack. A sign or branch error in the closed form would make every
 // interior error of those cases meaningless.

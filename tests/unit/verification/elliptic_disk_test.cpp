@@ -1,4 +1,4 @@
-// The elliptical disk's scene (verification/cases/elliptic_disk.hpp): the particles the paper's
+// The elliptical disk's scene (verification/runner/elliptic_disk.hpp): the particles the paper's
 // grid gives, the boundary zone held at eq. 116 and nothing else, the crack cutting arms, and
 // the refusal of a held zone thinner than a horizon. A small grid keeps each build well under a
 // second.

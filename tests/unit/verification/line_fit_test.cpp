@@ -1,4 +1,4 @@
-// The Griffith case's line fit (verification/cases/line_fit.hpp): exact on points of a line, the
+// The Griffith case's line fit (verification/runner/line_fit.hpp): exact on points of a line, the
 // textbook R² on a set with scatter, and its refusals.
 #include "line_fit.hpp"
 

@@ -1,4 +1,4 @@
-// Section-stiffness error budget (verification/cases/section_stiffness.hpp): the relaxed stiffness
+// Section-stiffness error budget (verification/runner/section_stiffness.hpp): the relaxed stiffness
 // of a PD cross-section against the continuum it discretises.
 #include "libpd/io/scene.hpp"
 #include "section_stiffness.hpp"
@@ -187,11 +187,11 @@ TEST(SectionStiffness, BeamCaseFromTheScenesSupportsAndLoads) {
   using pd::verification::beam_case_of;
   using pd::verification::BeamCase;
   const auto load = [](const std::string& name) {
-    return pd::load_scene(std::string(PD_SCENES_DIR) + "/" + name).model;
+    return pd::load_scene(std::string(PD_CASES_DIR) + "/" + name + "/" + name + ".yaml").model;
   };
-  auto cantilever = load("cantilever.yaml");
+  auto cantilever = load("cantilever");
   EXPECT_EQ(beam_case_of(cantilever, 0, 2), BeamCase::cantilever_uniform);
-  EXPECT_EQ(beam_case_of(load("clamped-beam.yaml"), 0, 2), BeamCase::clamped_uniform);
+  EXPECT_EQ(beam_case_of(load("clamped-beam"), 0, 2), BeamCase::clamped_uniform);
   auto tip = cantilever;
   tip.loads.front().load.region.boxes.front().lo[0] = 3.45;
   EXPECT_EQ(beam_case_of(tip, 0, 2), BeamCase::cantilever_tip);
