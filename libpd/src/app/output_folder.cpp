@@ -12,6 +12,7 @@
 #include <fmt/format.h>
 #include <sstream>
 #include <sys/file.h>
+#include <sys/stat.h>
 #include <sys/statvfs.h>
 #include <unistd.h>
 #include <vector>
@@ -52,6 +53,28 @@ std::vector<std::string> run_files_in(const std::filesystem::path& dir) {
   return found;
 }
 
+/// Every name a run may write in its folder: its outputs, the pieces of a split run, checkpoints.
+bool may_be_written_by_a_run(const std::string& name) {
+  return is_run_output_name(name) ||
+         (name.starts_with("particles-") && (name.ends_with(".pvtu") || name.ends_with(".vtu"))) ||
+         (name.starts_with("checkpoint") && name.ends_with(".pdcp"));
+}
+
+/// Symbolic links in `dir` under names the run writes: a run never writes through a link it did
+/// not make, and a folder prepared with such links is an attack or a mistake either way.
+std::vector<std::string> links_in(const std::filesystem::path& dir) {
+  std::vector<std::string> found;
+  std::error_code ec;
+  for (const auto& entry : std::filesystem::directory_iterator(dir, ec)) {
+    const std::string name = entry.path().filename().string();
+    std::error_code lec;
+    if (may_be_written_by_a_run(name) && entry.is_symlink(lec)) {
+      found.push_back(name);
+    }
+  }
+  return found;
+}
+
 std::string list(const std::vector<std::string>& names) {
   std::string s;
   for (std::size_t k = 0; k < names.size() && k < 5; ++k) {
@@ -79,11 +102,35 @@ OutputFolder::OutputFolder(std::filesystem::path dir, bool overwrite, bool conti
     throw OutputFolderError(
         fmt::format("cannot create the output folder {}: {}", dir_.string(), ec.message()));
   }
-  const std::filesystem::path lock = dir_ / lock_name;
-  lock_fd_ = ::open(lock.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  if (const std::vector<std::string> links = links_in(dir_); !links.empty()) {
+    throw OutputFolderError(fmt::format(
+        "the output folder {} holds symbolic links under names the run writes ({}): pd never "
+        "writes through a link; remove them or choose another folder (-o)",
+        dir_.string(), list(links)));
+  }
+  const int dir_fd = open_folder(dir_);
+  if (dir_fd < 0) {
+    throw OutputFolderError(
+        fmt::format("cannot open the output folder {}: {}", dir_.string(), std::strerror(errno)));
+  }
+  // O_NOFOLLOW: a link planted under the lock's name after the check above is refused (ELOOP).
+  lock_fd_ = ::openat(dir_fd, lock_name, O_RDWR | O_CREAT | O_NOFOLLOW | O_CLOEXEC, 0644);
+  const int open_errno = errno;
+  ::close(dir_fd);
   if (lock_fd_ < 0) {
-    throw OutputFolderError(fmt::format("cannot write in the output folder {}: {}", dir_.string(),
-                                        std::strerror(errno)));
+    throw OutputFolderError(fmt::format(
+        "cannot write in the output folder {}: {}{}", dir_.string(), std::strerror(open_errno),
+        open_errno == ELOOP ? fmt::format(" ({} is a symbolic link: remove it)", lock_name) : ""));
+  }
+  struct stat st {};
+  if (::fstat(lock_fd_, &st) != 0 || !S_ISREG(st.st_mode) || st.st_nlink != 1) {
+    ::close(lock_fd_);
+    lock_fd_ = -1;
+    // A hard link would let the pid written below truncate a file elsewhere.
+    throw OutputFolderError(fmt::format(
+        "the output folder's {} is not a plain file of its own (a hard link or a special file): "
+        "remove it or choose another folder (-o)",
+        (dir_ / lock_name).string()));
   }
   if (::flock(lock_fd_, LOCK_EX | LOCK_NB) != 0) {
     char pid[32] = {};
@@ -200,6 +247,12 @@ void check_checkpoint_target(const std::filesystem::path& checkpoint,
         "--checkpoint {} is a file the run itself writes: choose another name (default: "
         "{}/checkpoint.pdcp)",
         printable(checkpoint.string(), 400), printable(output_dir.string(), 400)));
+  }
+  if (std::filesystem::is_symlink(std::filesystem::symlink_status(checkpoint, ec))) {
+    throw OutputFolderError(fmt::format(
+        "--checkpoint {} is a symbolic link: pd never writes through a link; remove it or "
+        "choose another path",
+        printable(checkpoint.string(), 400)));
   }
   if (!std::filesystem::exists(st)) {
     return;
