@@ -154,8 +154,12 @@ Command add_run_command(CLI::App& app) {
           [](const std::string& path) {
             const auto mine = rank_file(path, world_communicator());
             // Only that it exists: what kind of file it is, the checkpoint reader says.
-            return std::filesystem::exists(mine) ? std::string{}
-                                                 : "File does not exist: " + mine.string();
+            std::error_code ec; // e.g. a name too long: said, not thrown out of the parser
+            if (std::filesystem::exists(mine, ec)) {
+              return std::string{};
+            }
+            return ec ? mine.string() + ": " + ec.message()
+                      : "File does not exist: " + mine.string();
           },
           "FILE"));
   return {cmd, [a] { return run(*a); }};

@@ -1,11 +1,15 @@
 """`pd run` never writes through a link it did not make (issue 38, items 1 and 2): a symbolic
 link planted in the output folder under a name the run writes, or under a temporary name it
-would have used, never lets the run change a file outside the folder. Each test failed before
-the fix (the lock, the manifest, summary.json and checkpoints were opened through links).
+would have used, never lets the run change a file outside the folder. And a path it could not
+write, or not read back, is refused before the run (item 3). Each test failed before the fix
+(the lock, the manifest, summary.json and checkpoints were opened through links; a folder path
+near PATH_MAX was claimed and found too long only when the run wrote into it).
 """
 import os
 
 import pdcli
+
+PATH_MAX = os.pathconf("/", "PC_PATH_MAX")
 
 KEEP = "KEEP: a file outside the output folder\n"
 
@@ -76,6 +80,35 @@ class FileSafety(pdcli.TestCase):
         strays = [f for f in os.listdir(out) if ".tmp-" in f and not os.path.islink(
             os.path.join(out, f))]
         self.assertEqual(strays, [])
+
+    def long_path(self, length):
+        """A path of `length` characters under the scratch folder, in components of 200."""
+        parts, total = [], len(self.dir)
+        while total + 1 + 200 < length:
+            parts.append("d" * 200)
+            total += 201
+        parts.append("e" * (length - total - 1))
+        p = os.path.join(self.dir, *parts)
+        self.assertEqual(len(p), length)
+        return p
+
+    # Item 3: a 4,080-character -o was claimed, ran, then failed with "File name too long".
+    def test_paths_near_path_max_are_refused_before_the_run(self):
+        out = self.long_path(PATH_MAX - 16)
+        r = self.pd(*self.run_args(out))
+        self.assertEqual(r.returncode, 1, r.stderr)
+        self.assertIn("the output folder (-o) is", r.stderr)
+        self.assertIn("PATH_MAX", r.stderr)
+        self.assertFalse(os.path.exists(os.path.dirname(out)), "the folder was claimed")
+        ckpt = self.long_path(PATH_MAX - 16)
+        r = self.pd(*self.run_args(self.path("out")), "--checkpoint", ckpt)
+        self.assertEqual(r.returncode, 1, r.stderr)
+        self.assertIn("the checkpoint path is", r.stderr)
+        self.assertFalse(os.path.exists(self.path("out", "summary.json")))
+        # A --restart path too long to open is an error message, not an abort.
+        r = self.pd("run", self.scene(), "-o", self.path("out2"), "--restart", ckpt + "x" * 16)
+        self.assertEqual(r.returncode, 1, r.stderr)
+        self.assertIn("File name too long", r.stderr)
 
 
 if __name__ == "__main__":

@@ -7,6 +7,7 @@
 #include "libpd/io/checkpoint.hpp"
 
 #include <cerrno>
+#include <climits>
 #include <cstring>
 #include <fcntl.h>
 #include <fmt/format.h>
@@ -75,6 +76,22 @@ std::vector<std::string> links_in(const std::filesystem::path& dir) {
   return found;
 }
 
+/// Room for the longest name a run writes in a folder with its temporary suffix (a split run's
+/// "particles-<step>-r<rank>.pvtu.tmp-XXXXXXXXXXXX", "checkpoint-r<rank>of<ranks>.pdcp.tmp-…").
+constexpr std::size_t longest_run_name = 64;
+
+/// Refuses before the run a path the system could not open: a file written under it could never
+/// be read back (nor given to --restart). PATH_MAX counts the terminating NUL.
+void check_path_length(const std::filesystem::path& path, std::size_t room, const char* what) {
+  const std::size_t length = path.native().size() + room;
+  if (length >= PATH_MAX) {
+    throw OutputFolderError(fmt::format(
+        "{} is {} characters long; with the names the run writes in it the paths would reach {}, "
+        "beyond the system's limit of {} (PATH_MAX): choose a shorter path",
+        what, path.native().size(), length, PATH_MAX - 1));
+  }
+}
+
 std::string list(const std::vector<std::string>& names) {
   std::string s;
   for (std::size_t k = 0; k < names.size() && k < 5; ++k) {
@@ -96,6 +113,7 @@ bool is_run_output_name(const std::string& name) {
 
 OutputFolder::OutputFolder(std::filesystem::path dir, bool overwrite, bool continuing)
     : dir_(std::move(dir)) {
+  check_path_length(dir_, 1 + longest_run_name, "the output folder (-o)");
   std::error_code ec;
   std::filesystem::create_directories(dir_, ec);
   if (ec) {
@@ -237,6 +255,11 @@ std::string OutputFolder::check_space(std::uint64_t bytes) const {
 
 void check_checkpoint_target(const std::filesystem::path& checkpoint,
                              const std::filesystem::path& output_dir) {
+  if (!output_dir.empty()) { // said of the folder first: the default checkpoint is inside it
+    check_path_length(output_dir, 1 + longest_run_name, "the output folder (-o)");
+  }
+  // A split run adds "-r<rank>of<ranks>" to the name; every piece has a temporary first.
+  check_path_length(checkpoint, longest_run_name, "the checkpoint path");
   std::error_code ec;
   const auto st = std::filesystem::status(checkpoint, ec);
   const std::string name = checkpoint.filename().string();

@@ -309,7 +309,8 @@ private:
       return;
     }
     const std::filesystem::path mine = rank_file(options_.restart, comm());
-    if (comm().size() > 1 && !std::filesystem::exists(mine)) {
+    std::error_code ec;
+    if (comm().size() > 1 && !std::filesystem::exists(mine, ec)) {
       throw CheckpointError(fmt::format(
           "no checkpoint piece {} for rank {} of {}: a run split over ranks restarts from the "
           "pieces written with the same rank count",
