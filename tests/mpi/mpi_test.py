@@ -8,6 +8,10 @@
         on N ranks: run A uninterrupted; run B killed with SIGKILL (the whole process group,
         mpiexec and every rank) between two checkpoints, then restarted from its checkpoint
         pieces; A and B must be identical, and so must their checkpoint pieces, byte for byte.
+    mpi_test.py errors PD MPIEXEC SCENE WORKDIR N
+        on N ranks (issue 38, items 5 and 6): the restart command a run prints works as
+        printed; with one rank's checkpoint piece deleted, the restart ends the whole job with
+        that rank's message (exit 1) instead of leaving the other ranks waiting forever.
 
 MPIEXEC may carry options ("mpiexec --oversubscribe"); as root, --allow-run-as-root is added.
 """
@@ -124,6 +128,40 @@ def kill_restart(pd, mpiexec, scene, work, n):
     print(f"checkpoint pieces identical: {', '.join(pieces)}")
 
 
+def errors(pd, mpiexec, scene, work, n):
+    out = work / "o"
+    printed = pd_run(pd, mpiexec, n, scene, out, ["--checkpoint-every", "300"])
+    line = next((l for l in printed.splitlines() if "to continue: " in l), None)
+    if line is None:
+        fail(f"no restart command printed:\n{printed}")
+    command = shlex.split(line.split("to continue: ", 1)[1])
+    print(f"printed: {' '.join(command)}")
+    if command[:3] != ["mpirun", "-np", str(n)] or command[3] != "pd":
+        fail(f"the printed command does not run pd on {n} ranks: {line}")
+    cmd = [*launcher(mpiexec, n), pd, *command[4:], "--threads", "1"]
+    p = subprocess.run(cmd, capture_output=True, text=True, timeout=120,
+                       env=dict(os.environ, OMP_NUM_THREADS="1"))
+    if p.returncode != 0:
+        fail(f"the printed restart command failed (exit {p.returncode}):\n{p.stderr}")
+    missing = out / f"checkpoint-r{n - 1:04d}of{n:04d}.pdcp"
+    missing.unlink()
+    cmd = [*launcher(mpiexec, n), pd, "run", scene, "-o", str(out), "--threads", "1",
+           "--restart", str(out / "checkpoint.pdcp")]
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            start_new_session=True, env=dict(os.environ, OMP_NUM_THREADS="1"))
+    try:
+        _, err = proc.communicate(timeout=60)
+    except subprocess.TimeoutExpired:
+        kill_all(proc.pid)
+        proc.communicate()
+        fail("a restart with a missing piece hangs (one rank waits for the one that failed)")
+    # The message shortens a long path, so the rank's own words are checked, not the name.
+    if proc.returncode != 1 or "File does not exist" not in err:
+        fail(f"a missing piece should end the job with exit 1 and the rank's message: exit "
+             f"{proc.returncode}\n{err}")
+    print("missing piece: exit 1 with the rank's message")
+
+
 def main():
     if len(sys.argv) != 7:
         fail(__doc__)
@@ -133,6 +171,8 @@ def main():
     work.mkdir(parents=True)
     if mode == "ranks":
         ranks(pd, mpiexec, scene, work, [int(c) for c in counts.split(",")])
+    elif mode == "errors":
+        errors(pd, mpiexec, scene, work, int(counts))
     elif mode == "kill-restart":
         kill_restart(pd, mpiexec, scene, work, int(counts))
     else:
