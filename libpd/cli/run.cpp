@@ -161,7 +161,9 @@ Command add_run_command(CLI::App& app) {
             const auto mine = rank_file(path, world_communicator());
             // Only that it exists: what kind of file it is, the checkpoint reader says.
             std::error_code ec; // e.g. a name too long: said, not thrown out of the parser
-            if (std::filesystem::exists(mine, ec)) {
+            // A set a killed rank left half-replaced may hold only the next piece.
+            if (std::filesystem::exists(mine, ec) ||
+                std::filesystem::exists(next_piece(mine), ec)) {
               return std::string{};
             }
             return ec ? mine.string() + ": " + ec.message()

@@ -58,7 +58,9 @@ std::vector<std::string> run_files_in(const std::filesystem::path& dir) {
 bool may_be_written_by_a_run(const std::string& name) {
   return is_run_output_name(name) ||
          (name.starts_with("particles-") && (name.ends_with(".pvtu") || name.ends_with(".vtu"))) ||
-         (name.starts_with("checkpoint") && name.ends_with(".pdcp"));
+         (name.starts_with("checkpoint") &&
+          (name.ends_with(".pdcp") || name.ends_with(".pdcp.next") ||
+           name.ends_with(".pdcp.complete")));
 }
 
 /// Symbolic links in `dir` under names the run writes: a run never writes through a link it did

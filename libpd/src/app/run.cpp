@@ -308,6 +308,7 @@ private:
     if (options_.restart.empty()) {
       return;
     }
+    recover_checkpoint_set(options_.restart, comm()); // a set a killed rank left half-replaced
     const std::filesystem::path mine = rank_file(options_.restart, comm());
     std::error_code ec;
     if (comm().size() > 1 && !std::filesystem::exists(mine, ec)) {
@@ -406,6 +407,12 @@ private:
     if (folder_) {
       for (int r = 0; r < comm().size(); ++r) { // every rank's piece (rank 0 keeps the list)
         folder_->add(rank_file(checkpoint_base_path(options_), r, comm().size()));
+        if (comm().size() > 1) {
+          folder_->add(next_piece(rank_file(checkpoint_base_path(options_), r, comm().size())));
+        }
+      }
+      if (comm().size() > 1) {
+        folder_->add(set_marker(checkpoint_base_path(options_)));
       }
     }
     checkpoints_->save(fingerprint(), s, out_.history, output_->frames());
