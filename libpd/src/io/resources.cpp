@@ -258,12 +258,17 @@ ResourceEstimate estimate_resources(const ModelSpec& spec, const SolverSpec& sol
   ResourceEstimate e;
   const ModelDimension& d = spec.dimension;
   Region all;
+  double given = 0; // particles of particle files and graded sets: counted, not estimated
   for (const BodySpec& b : spec.bodies) {
+    if (b.points) {
+      given += static_cast<double>(b.points->count());
+      continue;
+    }
     // Shapes by their bounding boxes, holes ignored: never fewer particles than there are.
     const std::vector<Box> cover = b.region.cover(d.dim);
     all.boxes.insert(all.boxes.end(), cover.begin(), cover.end());
   }
-  const double bodies = lattice_points_in_union(d, spec.lattice, all);
+  const double bodies = given + lattice_points_in_union(d, spec.lattice, all);
   // `gradient` weights are solved for here only where that is cheap (their orbit table grows as
   // m³: 8 s at m = 40); beyond, the estimate keeps every offset within δ, which can only count too
   // many. Solved once, for both the ghosts' reach and the family.
