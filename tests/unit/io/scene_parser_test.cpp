@@ -1373,9 +1373,9 @@ TEST(SceneParser, GradedSetsAreBoundedBeforeTheyAreMade) {
         << graded;
   };
   refused("      focal_half_distance: 0.0416667\n      zones: [1000, 1]\n      pattern: 3000000\n",
-          "more than 1e+08 particles");
+          "more than 1e+06 particles");
   refused("      focal_half_distance: 0.0416667\n      zones: [1000000, 1000000]\n",
-          "more than 1e+08 particles");
+          "more than 1e+06 particles");
   refused("      shape: box\n      box: [[0, 0], [1, 0.5]]\n      grading: 1e300\n", "particles");
   ::setenv("PD_MEMORY_LIMIT", "1M", 1); // 40 × 20 zones of 5 × 5: 20,000 particles, 1.8 MiB
   refused("      focal_half_distance: 0.0416667\n", "are allowed by PD_MEMORY_LIMIT");
