@@ -1,6 +1,8 @@
 """`pd run` at the edges of what a scene can do (issue 38): each test names its item and failed
 before the fix.
 """
+import csv
+import io
 import json
 import os
 import re
@@ -26,6 +28,23 @@ class RunLimits(pdcli.TestCase):
         self.assertEqual(r.returncode, 0, r.stderr)
         with open(os.path.join(out, "summary.json"), encoding="utf-8") as f:
             self.assertEqual(json.load(f)["status"], "end_time")
+
+    # Item 11: probes.csv kept a probe name's invalid UTF-8 (and a comma split its column).
+    def test_probe_names_make_a_valid_csv(self):
+        text = self.scene_text().encode().replace(b"  - name: tip_x\n", b'  - name: "tip\xff, x"\n')
+        scene = self.path("names.yaml")
+        with open(scene, "wb") as f:
+            f.write(text)
+        out = self.path("out")
+        r = self.pd("run", scene, "-o", out)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        with open(os.path.join(out, "probes.csv"), "rb") as f:
+            header = next(csv.reader(io.StringIO(f.read().decode("utf-8"))))
+        self.assertEqual(header, ["time", "tip\ufffd, x"])
+
+    def scene_text(self):
+        with open(self.scene(), encoding="utf-8") as f:
+            return f.read()
 
 
 if __name__ == "__main__":
