@@ -168,6 +168,24 @@ TEST(SceneGeometry, CrackCutsTheBondsThatCrossIt) {
   EXPECT_EQ(with.family.bond_count() + with.bonds_cut_by_crack[0], without.family.bond_count());
 }
 
+// Issue 38, item 11: a crack outside every body was accepted without a word (it cuts nothing).
+TEST(SceneGeometry, CrackOutsideEveryBodyIsAWarning) {
+  const pd::Scene inside = pd::parse_scene(plate(R"(cracks:
+  - name: c
+    segment: [[0.05, 0.05], [0.15, 0.05]]
+)") + solver,
+                                           "s.yaml");
+  EXPECT_TRUE(inside.warnings.empty()) << inside.warnings.front();
+  const pd::Scene outside = pd::parse_scene(plate(R"(cracks:
+  - name: c
+    segment: [[5, 5], [15, 5]]
+)") + solver,
+                                            "s.yaml");
+  ASSERT_EQ(outside.warnings.size(), 1u);
+  EXPECT_NE(outside.warnings[0].find("crack 'c' lies outside every body"), std::string::npos)
+      << outside.warnings[0];
+}
+
 TEST(SceneGeometry, CrackSegmentNeedsTwoPoints) {
   EXPECT_TRUE(fails_at(plate(R"(cracks:
   - name: c
