@@ -42,6 +42,17 @@ class RunLimits(pdcli.TestCase):
             header = next(csv.reader(io.StringIO(f.read().decode("utf-8"))))
         self.assertEqual(header, ["time", "tip\ufffd, x"])
 
+    # Item 11: E = 1e-300 made Δt 1e149 s: the run took 0 steps and ended "end_time", silently.
+    def test_a_step_longer_than_the_run_is_a_warning(self):
+        text = self.scene_text().replace("youngs_modulus: 200e9", "youngs_modulus: 1e-300")
+        out = self.path("out")
+        r = self.pd("run", self.scene("soft.yaml", text=text), "-o", out)
+        self.assertRegex(r.stderr, r"warning: a step \(Δt = \S+ s\) is longer than "
+                                   r"solver.end_time")
+        with open(os.path.join(out, "summary.json"), encoding="utf-8") as f:
+            warnings = json.load(f).get("warnings", [])
+        self.assertTrue(any("takes no step" in w for w in warnings), warnings)
+
     def scene_text(self):
         with open(self.scene(), encoding="utf-8") as f:
             return f.read()

@@ -144,6 +144,16 @@ private:
   // run and kept in the summary: such a run may still finish, and then its numbers must not pass
   // unremarked. ADR's Δt is fictitious and has no such limit.
   void check_time_step() {
+    // A step longer than the whole run (a material soft enough, E = 1e-300, makes Δt 1e149 s)
+    // ends it at once: "0 steps, status end_time" must not pass for a finished run.
+    const std::optional<double>& end = scene_.solver.end_time;
+    if (scene_.solver.integrator != IntegratorKind::static_solve && end && *end > 0 &&
+        sim_->dt() > *end) {
+      warn(fmt::format("a step (Δt = {:.4g} s) is longer than solver.end_time = {:.4g} s: the "
+                       "run takes no step; check the material's units (E in Pa, density in "
+                       "kg/m³) or lower dt",
+                       sim_->dt(), *end));
+    }
     if (!scene_.solver.dt || scene_.solver.integrator == IntegratorKind::adr) {
       return;
     }
