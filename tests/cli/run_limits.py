@@ -6,6 +6,9 @@ import io
 import json
 import os
 import re
+import signal
+import subprocess
+import time
 
 import pdcli
 
@@ -52,6 +55,21 @@ class RunLimits(pdcli.TestCase):
         with open(os.path.join(out, "summary.json"), encoding="utf-8") as f:
             warnings = json.load(f).get("warnings", [])
         self.assertTrue(any("takes no step" in w for w in warnings), warnings)
+
+    # Item 11: SIGTERM during the set-up killed the process (exit 143, no summary).
+    def test_sigterm_during_set_up_stops_cleanly(self):
+        # 150,000 particles: a set-up of about a second, and the signal well inside it.
+        text = self.scene_text().replace("spacing: 0.01", "spacing: 0.0002")
+        out = self.path("out")
+        p = subprocess.Popen([pdcli.PD, "run", self.scene("big.yaml", text=text), "-o", out],
+                             cwd=self.dir, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                             text=True)
+        time.sleep(0.2)
+        p.send_signal(signal.SIGTERM)
+        _, err = p.communicate(timeout=120)
+        self.assertEqual(p.returncode, 5, err)
+        with open(os.path.join(out, "summary.json"), encoding="utf-8") as f:
+            self.assertEqual(json.load(f)["status"], "interrupted")
 
     def scene_text(self):
         with open(self.scene(), encoding="utf-8") as f:

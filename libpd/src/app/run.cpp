@@ -32,20 +32,20 @@ public:
   SceneRun(const Scene& scene, const RunOptions& options) : scene_(scene), options_(options) {}
 
   RunOutcome run() {
+    // From the set-up to the last file: a stop request (Ctrl-C, SIGTERM, SIGHUP) ends the run
+    // at the first step after it (one during set-up, once the set-up is done), and one arriving
+    // while the final files are written only repeats the request. A scheduler's SIGTERM during
+    // a long set-up still leaves a summary and a checkpoint.
+    const InterruptGuard interrupt(options_.stop_on_interrupt);
     const auto start = std::chrono::steady_clock::now();
     claim_output();
     setup();
     restore();
     out_.setup_seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    {
-      // From the first step to the last file: a stop request (Ctrl-C, SIGTERM, SIGHUP) ends the
-      // stepping, and one arriving while the final files are written only repeats the request.
-      const InterruptGuard interrupt(options_.stop_on_interrupt);
-      advance(interrupt);
-      save_final_state();
-      write_results();
-    }
+    advance(interrupt);
+    save_final_state();
+    write_results();
     return std::move(out_);
   }
 
