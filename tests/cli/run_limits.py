@@ -58,13 +58,18 @@ class RunLimits(pdcli.TestCase):
 
     # Item 11: SIGTERM during the set-up killed the process (exit 143, no summary).
     def test_sigterm_during_set_up_stops_cleanly(self):
-        # 150,000 particles: a set-up of about a second, and the signal well inside it.
+        # 150,000 particles: a set-up of about a second; the signal arrives once the folder is
+        # claimed, which the run does first.
         text = self.scene_text().replace("spacing: 0.01", "spacing: 0.0002")
         out = self.path("out")
         p = subprocess.Popen([pdcli.PD, "run", self.scene("big.yaml", text=text), "-o", out],
                              cwd=self.dir, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                              text=True)
-        time.sleep(0.2)
+        deadline = time.monotonic() + 60
+        while not os.path.isdir(out):  # claimed: the stop request is heard from here on
+            self.assertIsNone(p.poll(), "the run ended before it claimed its folder")
+            self.assertLess(time.monotonic(), deadline, "the run never claimed its folder")
+            time.sleep(0.01)
         p.send_signal(signal.SIGTERM)
         _, err = p.communicate(timeout=120)
         self.assertEqual(p.returncode, 5, err)
