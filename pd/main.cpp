@@ -63,9 +63,17 @@ int main(int argc, char** argv) {
       pd::cli::add_stability_command(app), pd::cli::add_compare_command(app),
       pd::cli::add_section_command(app),
   };
+  // Under mpirun a rank that stops alone would leave the others waiting in a collective call
+  // forever: any rank's error, once said, ends the whole job.
+  const auto fail = [split](int code) {
+    if (split) {
+      pd::MpiSession::abort(code);
+    }
+    return code;
+  };
   if (const std::string why = argument_error(argc, argv); !why.empty()) {
     fmt::print(stderr, "error: {}\n", why);
-    return 1;
+    return fail(1);
   }
   try {
     app.parse(argc, argv);
@@ -77,28 +85,23 @@ int main(int argc, char** argv) {
     }
     fmt::print(stderr, "{}\nRun with --help for more information.\n",
                pd::printable_words(e.what()));
-    return 1;
+    return fail(1);
   }
   try {
     for (const auto& command : commands) {
       if (*command.app) {
-        return command.run();
+        const int code = command.run();
+        return code == 1 ? fail(code) : code; // 3 and 5 are reached by every rank together
       }
     }
   } catch (const pd::SceneError& e) {
     fmt::print(stderr, "{}\n", pd::printable_words(e.what(), long_word_bytes));
-    if (split) { // the other ranks may be waiting for this one: stop them all
-      pd::MpiSession::abort(1);
-    }
-    return 1;
+    return fail(1);
   } catch (const std::exception& e) {
     fmt::print(stderr, "error: {}{}\n",
                split ? fmt::format("rank {}: ", pd::world_communicator().rank()) : "",
                pd::printable_words(e.what(), long_word_bytes));
-    if (split) {
-      pd::MpiSession::abort(1);
-    }
-    return 1;
+    return fail(1);
   }
   return 0;
 }

@@ -32,7 +32,8 @@ struct RunArgs {
   std::string partition = "rcb";
 };
 
-void print_report(const RunArgs& a, const RunOutcome& out, double scene_seconds) {
+void print_report(const RunArgs& a, const RunOptions& opt, const RunOutcome& out,
+                  double scene_seconds) {
   if (out.restarted_from_step) {
     fmt::print("restarted from {} at step {}\n", a.restart, *out.restarted_from_step);
   }
@@ -61,10 +62,15 @@ void print_report(const RunArgs& a, const RunOutcome& out, double scene_seconds)
     fmt::print("results in {}/summary.json\n", a.out_dir);
   }
   if (!out.checkpoint.empty()) {
-    fmt::print(
-        "checkpoint {} (step {}); to continue: pd run {} -o {} --restart {}{}\n",
-        out.checkpoint.string(), out.checkpoint_step, a.scene, a.out_dir, out.checkpoint.string(),
-        a.checkpoint_every > 0 ? fmt::format(" --checkpoint-every {}", a.checkpoint_every) : "");
+    // A split run's pieces are restarted by their common name, on as many ranks.
+    const int ranks = opt.communicator != nullptr ? opt.communicator->size() : 1;
+    const std::string restart =
+        ranks > 1 ? checkpoint_base_path(opt).string() : out.checkpoint.string();
+    fmt::print("checkpoint {} ({}step {}); to continue: {}pd run {} -o {} --restart {}{}\n",
+               restart, ranks > 1 ? fmt::format("{} pieces, ", ranks) : "", out.checkpoint_step,
+               ranks > 1 ? fmt::format("mpirun -np {} ", ranks) : "", a.scene, a.out_dir, restart,
+               a.checkpoint_every > 0 ? fmt::format(" --checkpoint-every {}", a.checkpoint_every)
+                                      : "");
   }
 }
 
@@ -106,7 +112,7 @@ int run(const RunArgs& a) {
            : out.result.status == RunStatus::interrupted ? exit_interrupted
                                                          : 0;
   }
-  print_report(a, out, opt.scene_seconds);
+  print_report(a, opt, out, opt.scene_seconds);
   if (const Json* d = out.summary.find("distribution"); d != nullptr) {
     fmt::print("split over {} MPI ranks ({} partition): summary.json `distribution` has the "
                "particles, halo, memory and halo bytes per step of each rank\n",
@@ -162,8 +168,14 @@ Command add_run_command(CLI::App& app) {
           [](const std::string& path) {
             const auto mine = rank_file(path, world_communicator());
             // Only that it exists: what kind of file it is, the checkpoint reader says.
-            return std::filesystem::exists(mine) ? std::string{}
-                                                 : "File does not exist: " + mine.string();
+            std::error_code ec; // e.g. a name too long: said, not thrown out of the parser
+            // A set a killed rank left half-replaced may hold only the next piece.
+            if (std::filesystem::exists(mine, ec) ||
+                std::filesystem::exists(next_piece(mine), ec)) {
+              return std::string{};
+            }
+            return ec ? mine.string() + ": " + ec.message()
+                      : "File does not exist: " + mine.string();
           },
           "FILE"));
   return {cmd, [a] { return run(*a); }};

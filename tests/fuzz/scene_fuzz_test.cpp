@@ -3,7 +3,8 @@
 // Every case mutates one scene (a deleted key, a scalar replaced by text, a list, a map, NaN,
 // ±inf, −1, 0, 1e308, huge integers, duplicated keys or list items, a truncated file, flipped or
 // inserted bytes, a spacing so fine that the scene asks for gigabytes, a huge horizon or box,
-// deep nesting, alias bombs, ...) and must end in one of
+// deep nesting, alias bombs, a body made a graded set or a particle file, a crack, ...) and must
+// end in one of
 //   * a pd::SceneError whose message is "NAME:LINE:COL: error: ..." with a hint, or
 //   * a valid parse, which is then built and run with a hard cap (at most 20 steps, a few thousand
 //     particles; bigger models are only built, huge ones only estimated) and must either finish
@@ -239,8 +240,8 @@ private:
   }
 
   std::string once(const std::string& text, std::vector<std::string>& log) {
-    const int op = pick(16);
-    if (op < 8) {
+    const int op = pick(17);
+    if (op < 9) {
       YAML::Node root;
       try {
         root = YAML::Load(text);
@@ -347,6 +348,10 @@ private:
       }
       break;
     }
+    case 7: { // the other ways of making particles, and cracks (issue 38)
+      new_particles_or_crack(root, log);
+      break;
+    }
     default: { // duplicate a list item (duplicate names) or nest a value deeply
       std::vector<Slot> lists;
       for (const Slot& s : slots) {
@@ -374,6 +379,76 @@ private:
     }
     }
     return emit(root);
+  }
+
+  /// The first body made a graded set or a particle file, or a crack added: values at the
+  /// edges (counts that overflow, gradings that leave a zone no width, files that are no files).
+  void new_particles_or_crack(YAML::Node& root, std::vector<std::string>& log) {
+    YAML::Node bodies = root["bodies"];
+    const int kind = pick(3);
+    if (kind < 2 && bodies.IsSequence() && bodies.size() > 0 && bodies[0].IsMap()) {
+      YAML::Node body = bodies[0];
+      for (const char* key : {"box", "boxes", "cylinder", "sphere", "minus"}) {
+        body.remove(key);
+      }
+      if (kind == 0) {
+        static const std::vector<std::string> counts{"1",   "3",   "8", "40", "1000",
+                                                     "1e6", "3.5", "0", "-1", "3000000"};
+        static const std::vector<std::string> gradings{"1", "4", "1e6", "1e300", "0", "-1", "nan"};
+        YAML::Node graded(YAML::NodeType::Map);
+        if (pick(2) == 0) {
+          graded["shape"] = "box";
+          graded["box"] = YAML::Load(pick(4) == 0 ? "[[0, 0], [0, 1]]" : "[[0, 0], [1, 0.5]]");
+          graded["grading"] = choose(gradings);
+        } else {
+          graded["focal_half_distance"] = pick(4) == 0 ? "0" : "0.0416667";
+        }
+        YAML::Node zones(YAML::NodeType::Sequence);
+        zones.push_back(choose(counts));
+        zones.push_back(choose(counts));
+        graded["zones"] = zones;
+        graded["pattern"] = choose(counts);
+        log.push_back("graded body " + emit(graded));
+        body["graded"] = graded;
+      } else {
+        const std::string path = choose(particle_files());
+        log.push_back("particle body " + pd::printable(path));
+        body["particles"] = path;
+      }
+      return;
+    }
+    static const std::vector<std::string> segments{
+        "[[0.05, 0.05], [0.15, 0.05]]", "[[1e6, 1e6], [2e6, 1e6]]", "[[0, 0], [0, 0]]",
+        "[[0, 0, 0], [1, 1, 1]]",       "[[nan, 0], [1, 0]]",       "[[0, 0]]"};
+    YAML::Node crack(YAML::NodeType::Map);
+    crack["name"] = "fuzz";
+    crack["segment"] = YAML::Load(choose(segments));
+    YAML::Node cracks =
+        root["cracks"].IsSequence() ? root["cracks"] : YAML::Node(YAML::NodeType::Sequence);
+    cracks.push_back(crack);
+    root["cracks"] = cracks;
+    log.push_back("crack " + emit(crack));
+  }
+
+  /// A small valid particle file, one with a NUL byte in a cell, and paths that are no files.
+  static const std::vector<std::string>& particle_files() {
+    static const std::vector<std::string> files = [] {
+      const fs::path dir = fs::temp_directory_path();
+      const fs::path good = dir / "pd-fuzz-particles.csv";
+      const fs::path nul = dir / "pd-fuzz-particles-nul.csv";
+      std::string csv = "x,y,volume\n";
+      for (int j = 0; j < 8; ++j) {
+        for (int i = 0; i < 8; ++i) {
+          csv += fmt::format("{},{},1e-4\n", 0.01 * i, 0.01 * j);
+        }
+      }
+      std::ofstream(good, std::ios::binary) << csv;
+      std::ofstream(nul, std::ios::binary)
+          << std::string("x,y,volume\n0,0,1e-4\n0.01,0") + '\0' + ",1e-4\n";
+      return std::vector<std::string>{good.string(), nul.string(), "/nonexistent/p.csv",
+                                      "/dev/zero", dir.string()};
+    }();
+    return files;
   }
 
   std::string bytes_op(std::string text, std::vector<std::string>& log) {

@@ -8,6 +8,16 @@
         on N ranks: run A uninterrupted; run B killed with SIGKILL (the whole process group,
         mpiexec and every rank) between two checkpoints, then restarted from its checkpoint
         pieces; A and B must be identical, and so must their checkpoint pieces, byte for byte.
+    mpi_test.py errors PD MPIEXEC SCENE WORKDIR N
+        on N ranks (issue 38, items 5 and 6): the restart command a run prints works as
+        printed; with one rank's checkpoint piece deleted, the restart ends the whole job with
+        that rank's message (exit 1) instead of leaving the other ranks waiting forever.
+    mpi_test.py set-recovery PD MPIEXEC SCENE WORKDIR N
+        on N ranks (issue 38, item 4): a checkpoint set left half-replaced by a killed rank is
+        restartable. The two states a kill can leave are laid out exactly: killed while the new
+        pieces were written (the older set must be used) and killed while they were renamed into
+        place (the newer set must be finished); either restart must end as the run never
+        stopped. SCENE must end at step 900 (fracture-adr.yaml).
 
 MPIEXEC may carry options ("mpiexec --oversubscribe"); as root, --allow-run-as-root is added.
 """
@@ -124,6 +134,84 @@ def kill_restart(pd, mpiexec, scene, work, n):
     print(f"checkpoint pieces identical: {', '.join(pieces)}")
 
 
+def errors(pd, mpiexec, scene, work, n):
+    out = work / "o"
+    printed = pd_run(pd, mpiexec, n, scene, out, ["--checkpoint-every", "300"])
+    line = next((l for l in printed.splitlines() if "to continue: " in l), None)
+    if line is None:
+        fail(f"no restart command printed:\n{printed}")
+    command = shlex.split(line.split("to continue: ", 1)[1])
+    print(f"printed: {' '.join(command)}")
+    if command[:3] != ["mpirun", "-np", str(n)] or command[3] != "pd":
+        fail(f"the printed command does not run pd on {n} ranks: {line}")
+    cmd = [*launcher(mpiexec, n), pd, *command[4:], "--threads", "1"]
+    p = subprocess.run(cmd, capture_output=True, text=True, timeout=120,
+                       env=dict(os.environ, OMP_NUM_THREADS="1"))
+    if p.returncode != 0:
+        fail(f"the printed restart command failed (exit {p.returncode}):\n{p.stderr}")
+    missing = out / f"checkpoint-r{n - 1:04d}of{n:04d}.pdcp"
+    missing.unlink()
+    cmd = [*launcher(mpiexec, n), pd, "run", scene, "-o", str(out), "--threads", "1",
+           "--restart", str(out / "checkpoint.pdcp")]
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            start_new_session=True, env=dict(os.environ, OMP_NUM_THREADS="1"))
+    try:
+        _, err = proc.communicate(timeout=60)
+    except subprocess.TimeoutExpired:
+        kill_all(proc.pid)
+        proc.communicate()
+        fail("a restart with a missing piece hangs (one rank waits for the one that failed)")
+    # The message shortens a long path, so the rank's own words are checked, not the name.
+    if proc.returncode != 1 or "File does not exist" not in err:
+        fail(f"a missing piece should end the job with exit 1 and the rank's message: exit "
+             f"{proc.returncode}\n{err}")
+    print("missing piece: exit 1 with the rank's message")
+
+
+def set_recovery(pd, mpiexec, scene, work, n):
+    import shutil
+    every = ["--checkpoint-every", "300"]
+    a = work / "a"
+    pd_run(pd, mpiexec, n, scene, a, every)  # pieces of step 900
+    short = work / "short.yaml"  # the same run, ended at step 600: pieces of step 600
+    short.write_text(Path(scene).read_text().replace("end_time: 900", "end_time: 600"))
+    b = work / "b"
+    pd_run(pd, mpiexec, n, str(short), b, every)
+    pieces = [f"checkpoint-r{r:04d}of{n:04d}.pdcp" for r in range(n)]
+    for piece in pieces:
+        if not (b / piece).exists() or not (a / piece).exists():
+            fail(f"{piece} missing")
+
+    def restart(folder, expect_step):
+        out = pd_run(pd, mpiexec, n, scene, folder,
+                     [*every, "--restart", str(folder / "checkpoint.pdcp")])
+        first = out.splitlines()[0]
+        print(f"{folder.name}: {first}")
+        if int(first.rsplit(" ", 1)[1]) != expect_step:
+            fail(f"{folder.name}: expected a restart at step {expect_step}: {first}")
+        for piece in pieces:  # the set in place is the run's last, whole and alone
+            if (folder / piece).read_bytes() != (a / piece).read_bytes():
+                fail(f"{folder.name}: {piece} differs from the uninterrupted run's")
+        left = [f.name for f in folder.iterdir() if f.name.endswith((".next", ".complete"))]
+        if left:
+            fail(f"{folder.name}: left behind {left}")
+
+    # Killed while writing the step-900 set: rank 0's next piece written, no marker.
+    writing = work / "writing"
+    shutil.copytree(b, writing)
+    shutil.copy(a / pieces[0], writing / (pieces[0] + ".next"))
+    restart(writing, 600)
+    # Killed while renaming the complete step-900 set: the marker stands, rank 0's piece is
+    # renamed, the others' are still next pieces.
+    renaming = work / "renaming"
+    shutil.copytree(b, renaming)
+    shutil.copy(a / pieces[0], renaming / pieces[0])
+    for piece in pieces[1:]:
+        shutil.copy(a / piece, renaming / (piece + ".next"))
+    (renaming / "checkpoint.pdcp.complete").write_bytes(b"")
+    restart(renaming, 900)
+
+
 def main():
     if len(sys.argv) != 7:
         fail(__doc__)
@@ -133,6 +221,10 @@ def main():
     work.mkdir(parents=True)
     if mode == "ranks":
         ranks(pd, mpiexec, scene, work, [int(c) for c in counts.split(",")])
+    elif mode == "errors":
+        errors(pd, mpiexec, scene, work, int(counts))
+    elif mode == "set-recovery":
+        set_recovery(pd, mpiexec, scene, work, int(counts))
     elif mode == "kill-restart":
         kill_restart(pd, mpiexec, scene, work, int(counts))
     else:

@@ -7,11 +7,13 @@
 #include "libpd/io/checkpoint.hpp"
 
 #include <cerrno>
+#include <climits>
 #include <cstring>
 #include <fcntl.h>
 #include <fmt/format.h>
 #include <sstream>
 #include <sys/file.h>
+#include <sys/stat.h>
 #include <sys/statvfs.h>
 #include <unistd.h>
 #include <vector>
@@ -52,6 +54,46 @@ std::vector<std::string> run_files_in(const std::filesystem::path& dir) {
   return found;
 }
 
+/// Every name a run may write in its folder: its outputs, the pieces of a split run, checkpoints.
+bool may_be_written_by_a_run(const std::string& name) {
+  return is_run_output_name(name) ||
+         (name.starts_with("particles-") && (name.ends_with(".pvtu") || name.ends_with(".vtu"))) ||
+         (name.starts_with("checkpoint") &&
+          (name.ends_with(".pdcp") || name.ends_with(".pdcp.next") ||
+           name.ends_with(".pdcp.complete")));
+}
+
+/// Symbolic links in `dir` under names the run writes: a run never writes through a link it did
+/// not make, and a folder prepared with such links is an attack or a mistake either way.
+std::vector<std::string> links_in(const std::filesystem::path& dir) {
+  std::vector<std::string> found;
+  std::error_code ec;
+  for (const auto& entry : std::filesystem::directory_iterator(dir, ec)) {
+    const std::string name = entry.path().filename().string();
+    std::error_code lec;
+    if (may_be_written_by_a_run(name) && entry.is_symlink(lec)) {
+      found.push_back(name);
+    }
+  }
+  return found;
+}
+
+/// Room for the longest name a run writes in a folder with its temporary suffix (a split run's
+/// "particles-<step>-r<rank>.pvtu.tmp-XXXXXXXXXXXX", "checkpoint-r<rank>of<ranks>.pdcp.tmp-…").
+constexpr std::size_t longest_run_name = 64;
+
+/// Refuses before the run a path the system could not open: a file written under it could never
+/// be read back (nor given to --restart). PATH_MAX counts the terminating NUL.
+void check_path_length(const std::filesystem::path& path, std::size_t room, const char* what) {
+  const std::size_t length = path.native().size() + room;
+  if (length >= PATH_MAX) {
+    throw OutputFolderError(fmt::format(
+        "{} is {} characters long; with the names the run writes in it the paths would reach {}, "
+        "beyond the system's limit of {} (PATH_MAX): choose a shorter path",
+        what, path.native().size(), length, PATH_MAX - 1));
+  }
+}
+
 std::string list(const std::vector<std::string>& names) {
   std::string s;
   for (std::size_t k = 0; k < names.size() && k < 5; ++k) {
@@ -73,17 +115,42 @@ bool is_run_output_name(const std::string& name) {
 
 OutputFolder::OutputFolder(std::filesystem::path dir, bool overwrite, bool continuing)
     : dir_(std::move(dir)) {
+  check_path_length(dir_, 1 + longest_run_name, "the output folder (-o)");
   std::error_code ec;
   std::filesystem::create_directories(dir_, ec);
   if (ec) {
     throw OutputFolderError(
         fmt::format("cannot create the output folder {}: {}", dir_.string(), ec.message()));
   }
-  const std::filesystem::path lock = dir_ / lock_name;
-  lock_fd_ = ::open(lock.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  if (const std::vector<std::string> links = links_in(dir_); !links.empty()) {
+    throw OutputFolderError(fmt::format(
+        "the output folder {} holds symbolic links under names the run writes ({}): pd never "
+        "writes through a link; remove them or choose another folder (-o)",
+        dir_.string(), list(links)));
+  }
+  const int dir_fd = open_folder(dir_);
+  if (dir_fd < 0) {
+    throw OutputFolderError(
+        fmt::format("cannot open the output folder {}: {}", dir_.string(), std::strerror(errno)));
+  }
+  // O_NOFOLLOW: a link planted under the lock's name after the check above is refused (ELOOP).
+  lock_fd_ = ::openat(dir_fd, lock_name, O_RDWR | O_CREAT | O_NOFOLLOW | O_CLOEXEC, 0644);
+  const int open_errno = errno;
+  ::close(dir_fd);
   if (lock_fd_ < 0) {
-    throw OutputFolderError(fmt::format("cannot write in the output folder {}: {}", dir_.string(),
-                                        std::strerror(errno)));
+    throw OutputFolderError(fmt::format(
+        "cannot write in the output folder {}: {}{}", dir_.string(), std::strerror(open_errno),
+        open_errno == ELOOP ? fmt::format(" ({} is a symbolic link: remove it)", lock_name) : ""));
+  }
+  struct stat st {};
+  if (::fstat(lock_fd_, &st) != 0 || !S_ISREG(st.st_mode) || st.st_nlink != 1) {
+    ::close(lock_fd_);
+    lock_fd_ = -1;
+    // A hard link would let the pid written below truncate a file elsewhere.
+    throw OutputFolderError(fmt::format(
+        "the output folder's {} is not a plain file of its own (a hard link or a special file): "
+        "remove it or choose another folder (-o)",
+        (dir_ / lock_name).string()));
   }
   if (::flock(lock_fd_, LOCK_EX | LOCK_NB) != 0) {
     char pid[32] = {};
@@ -190,6 +257,11 @@ std::string OutputFolder::check_space(std::uint64_t bytes) const {
 
 void check_checkpoint_target(const std::filesystem::path& checkpoint,
                              const std::filesystem::path& output_dir) {
+  if (!output_dir.empty()) { // said of the folder first: the default checkpoint is inside it
+    check_path_length(output_dir, 1 + longest_run_name, "the output folder (-o)");
+  }
+  // A split run adds "-r<rank>of<ranks>" to the name; every piece has a temporary first.
+  check_path_length(checkpoint, longest_run_name, "the checkpoint path");
   std::error_code ec;
   const auto st = std::filesystem::status(checkpoint, ec);
   const std::string name = checkpoint.filename().string();
@@ -200,6 +272,12 @@ void check_checkpoint_target(const std::filesystem::path& checkpoint,
         "--checkpoint {} is a file the run itself writes: choose another name (default: "
         "{}/checkpoint.pdcp)",
         printable(checkpoint.string(), 400), printable(output_dir.string(), 400)));
+  }
+  if (std::filesystem::is_symlink(std::filesystem::symlink_status(checkpoint, ec))) {
+    throw OutputFolderError(fmt::format(
+        "--checkpoint {} is a symbolic link: pd never writes through a link; remove it or "
+        "choose another path",
+        printable(checkpoint.string(), 400)));
   }
   if (!std::filesystem::exists(st)) {
     return;

@@ -1,6 +1,7 @@
 // Probes of a run: binding probe specs to particles and writing their history.
 #include "libpd/app/probes.hpp"
 
+#include "libpd/core/text.hpp"
 #include "libpd/discretisation/mirror_constraints.hpp"
 
 #include <algorithm>
@@ -189,10 +190,33 @@ ProbeHistory ProbeHistory::finite_rows() const {
   return clean;
 }
 
+namespace {
+
+/// A probe name as one CSV header cell: valid UTF-8 (any reader takes the file), and quoted
+/// (RFC 4180) when it holds a separator, a quote or a line break.
+std::string csv_cell(const std::string& name) {
+  std::string text = valid_utf8(name);
+  if (text.find_first_of(",\"\r\n") == std::string::npos) {
+    return text;
+  }
+  std::string quoted(1, '"');
+  for (const char c : text) {
+    quoted.push_back(c);
+    if (c == '"') {
+      quoted.push_back('"');
+    }
+  }
+  quoted.push_back('"');
+  return quoted;
+}
+
+} // namespace
+
 std::string probes_csv(const std::vector<ResolvedProbe>& probes, const ProbeHistory& history) {
   std::string s = "time";
   for (const auto& p : probes) {
-    s += "," + p.name;
+    s += ',';
+    s += csv_cell(p.name);
   }
   s += "\n";
   for (std::size_t r = 0; r < history.time.size(); ++r) {

@@ -34,11 +34,13 @@ public:
   SceneRun(const Scene& scene, const RunOptions& options) : scene_(scene), options_(options) {}
 
   RunOutcome run() {
+    // From the set-up to the last file: a stop request (Ctrl-C, SIGTERM, SIGHUP) ends the run
+    // at the first step after it (one during set-up, once the set-up is done), and one arriving
+    // while the final files are written only repeats the request. A scheduler's SIGTERM during
+    // a long set-up still leaves a summary and a checkpoint.
+    const InterruptGuard interrupt(options_.stop_on_interrupt);
     const auto start = std::chrono::steady_clock::now();
     claim_output();
-    // From the claim to the last file: a stop request (Ctrl-C, SIGTERM, SIGHUP) ends the
-    // stepping, and one arriving while the final files are written only repeats the request.
-    const InterruptGuard interrupt(options_.stop_on_interrupt);
     {
       // Set-up and a step need not poll: where they do not answer a request in time (a large
       // model's bonds, the static solve's factorisation), the run is abandoned with a summary.
@@ -156,6 +158,16 @@ private:
   // run and kept in the summary: such a run may still finish, and then its numbers must not pass
   // unremarked. ADR's Δt is fictitious and has no such limit.
   void check_time_step() {
+    // A step longer than the whole run (a material soft enough, E = 1e-300, makes Δt 1e149 s)
+    // ends it at once: "0 steps, status end_time" must not pass for a finished run.
+    const std::optional<double>& end = scene_.solver.end_time;
+    if (scene_.solver.integrator != IntegratorKind::static_solve && end && *end > 0 &&
+        sim_->dt() > *end) {
+      warn(fmt::format("a step (Δt = {:.4g} s) is longer than solver.end_time = {:.4g} s: the "
+                       "run takes no step; check the material's units (E in Pa, density in "
+                       "kg/m³) or lower dt",
+                       sim_->dt(), *end));
+    }
     if (!scene_.solver.dt || scene_.solver.integrator == IntegratorKind::adr) {
       return;
     }
@@ -322,8 +334,10 @@ private:
     if (options_.restart.empty()) {
       return;
     }
+    recover_checkpoint_set(options_.restart, comm()); // a set a killed rank left half-replaced
     const std::filesystem::path mine = rank_file(options_.restart, comm());
-    if (comm().size() > 1 && !std::filesystem::exists(mine)) {
+    std::error_code ec;
+    if (comm().size() > 1 && !std::filesystem::exists(mine, ec)) {
       throw CheckpointError(fmt::format(
           "no checkpoint piece {} for rank {} of {}: a run split over ranks restarts from the "
           "pieces written with the same rank count",
@@ -420,6 +434,12 @@ private:
     if (folder_) {
       for (int r = 0; r < comm().size(); ++r) { // every rank's piece (rank 0 keeps the list)
         folder_->add(rank_file(checkpoint_base_path(options_), r, comm().size()));
+        if (comm().size() > 1) {
+          folder_->add(next_piece(rank_file(checkpoint_base_path(options_), r, comm().size())));
+        }
+      }
+      if (comm().size() > 1) {
+        folder_->add(set_marker(checkpoint_base_path(options_)));
       }
     }
     checkpoints_->save(fingerprint(), s, out_.history, output_->frames());

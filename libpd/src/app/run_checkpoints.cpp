@@ -2,7 +2,11 @@
 // simulation's state.
 #include "libpd/app/run_checkpoints.hpp"
 
+#include "libpd/core/atomic_file.hpp"
+
 #include <fmt/format.h>
+#include <functional>
+#include <unistd.h>
 
 namespace pd {
 
@@ -145,9 +149,72 @@ CheckpointFingerprint run_fingerprint(const Scene& scene, const Simulation& sim,
   return f;
 }
 
+std::filesystem::path next_piece(const std::filesystem::path& piece) {
+  return piece.string() + ".next";
+}
+
+std::filesystem::path set_marker(const std::filesystem::path& base) {
+  return base.string() + ".complete";
+}
+
+namespace {
+
+/// Renames or removes, then makes that durable: the set on disk is what a restart will see.
+void durably(const std::filesystem::path& folder_of, const std::function<void()>& change) {
+  change();
+  const int fd = open_folder(folder_of.parent_path());
+  if (fd >= 0) {
+    ::fsync(fd);
+    ::close(fd);
+  }
+}
+
+void promote(const std::filesystem::path& next, const std::filesystem::path& piece) {
+  std::error_code ec;
+  durably(piece, [&] { std::filesystem::rename(next, piece, ec); });
+  if (ec) {
+    throw CheckpointError(
+        fmt::format("cannot rename {} to {}: {}", next.string(), piece.string(), ec.message()));
+  }
+}
+
+void remove_durably(const std::filesystem::path& file) {
+  std::error_code ec;
+  durably(file, [&] { std::filesystem::remove(file, ec); });
+  if (ec) {
+    throw CheckpointError(fmt::format("cannot remove {}: {}", file.string(), ec.message()));
+  }
+}
+
+} // namespace
+
+void recover_checkpoint_set(const std::filesystem::path& base, const Communicator& comm) {
+  if (comm.size() == 1) {
+    return; // one file, replaced atomically
+  }
+  const std::filesystem::path mine = rank_file(base, comm);
+  std::error_code ec;
+  const bool complete = std::filesystem::exists(set_marker(base), ec);
+  comm.barrier(); // every rank has seen the marker before it goes
+  if (std::filesystem::exists(next_piece(mine), ec)) {
+    if (complete) {
+      promote(next_piece(mine), mine);
+    } else {
+      remove_durably(next_piece(mine)); // an incomplete newer set: the one in place stands
+    }
+  }
+  comm.barrier();
+  if (comm.root() && complete) {
+    remove_durably(set_marker(base));
+  }
+  comm.barrier();
+}
+
 CheckpointPolicy::CheckpointPolicy(const RunOptions& options, std::string refusal)
-    : file_(checkpoint_path(options)), every_(options.checkpoint_every),
-      file_given_(!options.checkpoint.empty()), refusal_(std::move(refusal)) {
+    : comm_(options.communicator != nullptr ? options.communicator : &serial_communicator()),
+      base_(checkpoint_base_path(options)), file_(checkpoint_path(options)),
+      every_(options.checkpoint_every), file_given_(!options.checkpoint.empty()),
+      refusal_(std::move(refusal)) {
   if (every_ > 0 && file_.empty()) {
     throw CheckpointError("checkpoints need a file: give an output folder or a checkpoint path");
   }
@@ -169,7 +236,23 @@ void CheckpointPolicy::save(const CheckpointFingerprint& fingerprint, const Simu
   CheckpointWriter w;
   sim.save(w);
   save_history(w, history, frames);
-  write_checkpoint(file_, fingerprint, w);
+  if (comm_->size() == 1) {
+    write_checkpoint(file_, fingerprint, w);
+    return;
+  }
+  // Each barrier orders one phase on every rank before the next (see next_piece).
+  write_checkpoint(next_piece(file_), fingerprint, w);
+  comm_->barrier();
+  if (comm_->root()) {
+    write_file_atomically(set_marker(base_), "", Durability::synced);
+  }
+  comm_->barrier();
+  promote(next_piece(file_), file_);
+  comm_->barrier();
+  if (comm_->root()) {
+    remove_durably(set_marker(base_));
+  }
+  comm_->barrier(); // no rank starts a newer next piece while the marker still stands
 }
 
 void CheckpointPolicy::restore(const std::filesystem::path& path,

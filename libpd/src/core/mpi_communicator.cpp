@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <limits>
 #include <stdexcept>
@@ -230,6 +231,7 @@ void MpiSession::abort(int code) {
     int size = 1;
     MPI_Comm_size(MPI_COMM_WORLD, &size);
     if (size > 1) {
+      std::fflush(nullptr); // the message said before the abort must not die in a buffer
       MPI_Abort(MPI_COMM_WORLD, code);
     }
   }

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fmt/format.h>
 #include <limits>
 #include <numbers>
 #include <random>
@@ -145,6 +146,21 @@ std::vector<double> nearest_areas(const ZoneMap& map, const std::vector<int>& co
   return area;
 }
 
+/// Rows of column i of nu (box: about as far apart across as along; ellipse: all alike), in
+/// floating point: the generator's own rule, shared so that the count is exactly what it makes.
+double rows_of_column(const GradedSetSpec& s, const ZoneMap& map, double i, double nu) {
+  const double nv = static_cast<double>(s.zones[1]) * s.pattern;
+  if (s.shape != GradedShape::box) {
+    return nv;
+  }
+  const double du = 1.0 / nu;
+  const double u = (i + 0.5) * du;
+  const double width = map.jacobian(u, 0.5) / (s.box.hi[1] - s.box.lo[1]) * du;
+  const double height = (s.box.hi[1] - s.box.lo[1]) / nv;
+  const double rows = std::round(nv * height / width);
+  return std::isfinite(rows) ? std::max(1.0, rows) : std::numeric_limits<double>::infinity();
+}
+
 void check(const GradedSetSpec& s) {
   const bool zones = s.zones[0] >= 1 && s.zones[1] >= 1 && s.pattern >= 1;
   const bool ellipse = s.focal_half_distance > 0 && s.xi_max > 0;
@@ -153,9 +169,29 @@ void check(const GradedSetSpec& s) {
       !(s.min_spacing >= 0) || s.sweeps < 0 || s.size_neighbours < 1) {
     throw std::invalid_argument("generate_graded_set: the spec describes no body");
   }
+  if (!(graded_set_size(s) <= max_graded_particles)) {
+    throw std::invalid_argument(
+        fmt::format("generate_graded_set: about {:.3g} particles, more than the {:.3g} a graded "
+                    "set may have",
+                    graded_set_size(s), max_graded_particles));
+  }
 }
 
 } // namespace
+
+double graded_set_size(const GradedSetSpec& spec) {
+  const ZoneMap map(spec);
+  const double nu = static_cast<double>(spec.zones[0]) * spec.pattern;
+  if (spec.shape != GradedShape::box || !(nu <= max_graded_particles)) {
+    // The ellipse's columns are alike; a box's have at least one row each: too many anyway.
+    return nu * rows_of_column(spec, map, 0, nu);
+  }
+  double total = 0;
+  for (double i = 0; i < nu && total <= max_graded_particles; ++i) {
+    total += rows_of_column(spec, map, i, nu);
+  }
+  return total;
+}
 
 PointCloud generate_graded_set(const GradedSetSpec& spec, double thickness) {
   check(spec);
@@ -171,12 +207,7 @@ PointCloud generate_graded_set(const GradedSetSpec& spec, double thickness) {
   std::vector<int> column_rows;
   for (int i = 0; i < nu; ++i) {
     const double u = (i + 0.5) * du;
-    int nv = spec.zones[1] * spec.pattern;
-    if (spec.shape == GradedShape::box) {
-      const double width = map.jacobian(u, 0.5) / (spec.box.hi[1] - spec.box.lo[1]) * du;
-      const double height = (spec.box.hi[1] - spec.box.lo[1]) / nv;
-      nv = std::max(1, static_cast<int>(std::lround(nv * height / width)));
-    }
+    const int nv = static_cast<int>(rows_of_column(spec, map, i, nu)); // bounded by check()
     column_rows.push_back(nv);
     const double dv = 1.0 / nv;
     for (int j = 0; j < nv; ++j) {

@@ -1,15 +1,11 @@
 #include "libpd/io/checkpoint.hpp"
 
+#include "libpd/core/atomic_file.hpp"
 #include "libpd/core/file_input.hpp"
 
-#include <cerrno>
-#include <fcntl.h>
 #include <fmt/format.h>
-#include <fstream>
 #include <iterator>
 #include <limits>
-#include <sys/stat.h>
-#include <unistd.h>
 
 namespace pd {
 
@@ -44,20 +40,6 @@ std::string encode_fingerprint(const CheckpointFingerprint& f) {
 
 [[noreturn]] void refuse(const std::filesystem::path& path, const std::string& why) {
   throw CheckpointError(fmt::format("checkpoint {}: {}", path.string(), why));
-}
-
-void write_all(int fd, const std::string& s, const std::filesystem::path& tmp) {
-  std::size_t done = 0;
-  while (done < s.size()) {
-    const ssize_t n = ::write(fd, s.data() + done, s.size() - done);
-    if (n < 0) {
-      if (errno == EINTR) {
-        continue;
-      }
-      throw CheckpointError(fmt::format("cannot write {}: {}", tmp.string(), std::strerror(errno)));
-    }
-    done += static_cast<std::size_t>(n);
-  }
 }
 
 /// The parsed, integrity-checked parts of a file.
@@ -190,43 +172,10 @@ void write_checkpoint(const std::filesystem::path& path, const CheckpointFingerp
   const std::uint64_t checksum = h.value();
   append(s, &checksum, sizeof checksum);
 
-  const std::filesystem::path dir =
-      path.has_parent_path() ? path.parent_path() : std::filesystem::path(".");
-  std::filesystem::create_directories(dir);
-  const std::filesystem::path tmp =
-      path.string() + fmt::format(".tmp-{}", static_cast<long>(::getpid()));
-  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0) {
-    throw CheckpointError(fmt::format("cannot create {}: {}", tmp.string(), std::strerror(errno)));
-  }
   try {
-    write_all(fd, s, tmp);
-    // The data must be on disk before the rename makes it the checkpoint: otherwise a power cut
-    // could leave a renamed but empty file in place of the previous good one.
-    if (::fsync(fd) != 0) {
-      throw CheckpointError(
-          fmt::format("fsync of {} failed: {}", tmp.string(), std::strerror(errno)));
-    }
-  } catch (...) {
-    ::close(fd);
-    std::error_code ignored;
-    std::filesystem::remove(tmp, ignored);
-    throw;
-  }
-  ::close(fd);
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) {
-    std::error_code ignored;
-    std::filesystem::remove(tmp, ignored);
-    throw CheckpointError(
-        fmt::format("cannot rename {} to {}: {}", tmp.string(), path.string(), ec.message()));
-  }
-  // Make the rename itself durable.
-  const int dfd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-  if (dfd >= 0) {
-    ::fsync(dfd);
-    ::close(dfd);
+    write_file_atomically(path, s, Durability::synced);
+  } catch (const std::runtime_error& e) {
+    throw CheckpointError(e.what());
   }
 }
 

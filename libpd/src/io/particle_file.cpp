@@ -1,6 +1,7 @@
 #include "libpd/io/particle_file.hpp"
 
 #include "libpd/core/file_input.hpp"
+#include "libpd/core/text.hpp"
 
 #include <array>
 #include <cctype>
@@ -153,10 +154,10 @@ PointCloud parse_particle_csv(std::string_view text, const std::string& name, in
       const std::string_view cell = cells[column];
       const auto [ptr, ec] = std::from_chars(cell.data(), cell.data() + cell.size(), v);
       if (ec != std::errc() || ptr != cell.data() + cell.size()) {
-        fail(fmt::format("'{}' in column '{}' is not a number", cell, what));
+        fail(fmt::format("'{}' in column '{}' is not a number", printable(cell), what));
       }
       if (!std::isfinite(v)) {
-        fail(fmt::format("'{}' in column '{}' is not finite", cell, what));
+        fail(fmt::format("'{}' in column '{}' is not finite", printable(cell), what));
       }
       return v;
     };
@@ -304,7 +305,8 @@ std::vector<double> read_data_array(std::string_view text, const Tag& tag, std::
       const auto [ptr, ec] = std::from_chars(body.data() + at, body.data() + end, v);
       if (ec != std::errc() || ptr != body.data() + end) {
         fail(fmt::format("point {}: '{}' in array '{}' is not a number",
-                         values.size() / components + 1, body.substr(at, end - at), name));
+                         values.size() / components + 1, printable(body.substr(at, end - at)),
+                         printable(name)));
       }
       values.push_back(v);
       at = end;
@@ -316,8 +318,8 @@ std::vector<double> read_data_array(std::string_view text, const Tag& tag, std::
         {"Float32", 4}, {"Float64", 8}, {"Int32", 4}, {"Int64", 8}, {"UInt32", 4}, {"UInt64", 8}};
     const auto width = widths.find(type);
     if (width == widths.end()) {
-      fail(fmt::format("array '{}' has type '{}': Float32, Float64 or (U)Int32/64 expected", name,
-                       type));
+      fail(fmt::format("array '{}' has type '{}': Float32, Float64 or (U)Int32/64 expected",
+                       printable(name), printable(type)));
     }
     const std::size_t count = bytes.size() < header ? 0 : (bytes.size() - header) / width->second;
     for (std::size_t i = 0; i < count; ++i) {
@@ -332,7 +334,7 @@ std::vector<double> read_data_array(std::string_view text, const Tag& tag, std::
   } else {
     fail(fmt::format("array '{}' is stored as '{}': only ascii and inline binary (base64) arrays "
                      "are read (in ParaView: Save Data, Data Mode Ascii)",
-                     name, format));
+                     printable(name), printable(format)));
   }
   if (values.size() != expected) {
     fail(fmt::format("array '{}' has {} values where its points need {}", name, values.size(),

@@ -254,16 +254,31 @@ double bulk_family_size(const ModelDimension& d, const LatticeSpec& lattice, Hor
   return lattice.position_jitter > 0 ? std::max(count, ball) : count;
 }
 
+/// The bodies' particles: those of particle files and graded sets counted, the lattice's
+/// estimated in `lattice_region`, the union of the other bodies' boxes (shapes by their bounding
+/// boxes, holes ignored: never fewer particles than there are).
+namespace {
+
+double body_particles(const ModelSpec& spec, Region& lattice_region) {
+  double given = 0;
+  for (const BodySpec& b : spec.bodies) {
+    if (b.points) {
+      given += static_cast<double>(b.points->count());
+      continue;
+    }
+    const std::vector<Box> cover = b.region.cover(spec.dimension.dim);
+    lattice_region.boxes.insert(lattice_region.boxes.end(), cover.begin(), cover.end());
+  }
+  return given + lattice_points_in_union(spec.dimension, spec.lattice, lattice_region);
+}
+
+} // namespace
+
 ResourceEstimate estimate_resources(const ModelSpec& spec, const SolverSpec& solver) {
   ResourceEstimate e;
   const ModelDimension& d = spec.dimension;
   Region all;
-  for (const BodySpec& b : spec.bodies) {
-    // Shapes by their bounding boxes, holes ignored: never fewer particles than there are.
-    const std::vector<Box> cover = b.region.cover(d.dim);
-    all.boxes.insert(all.boxes.end(), cover.begin(), cover.end());
-  }
-  const double bodies = lattice_points_in_union(d, spec.lattice, all);
+  const double bodies = body_particles(spec, all);
   // `gradient` weights are solved for here only where that is cheap (their orbit table grows as
   // m³: 8 s at m = 40); beyond, the estimate keeps every offset within δ, which can only count too
   // many. Solved once, for both the ghosts' reach and the family.

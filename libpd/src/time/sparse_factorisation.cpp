@@ -48,6 +48,39 @@ void check_fits(double bytes) {
   }
 }
 
+/// CHOLMOD's workspace for the lifetime of its owner: finished on every path out, a throw from
+/// the owner's constructor included.
+class CholmodCommon {
+public:
+  CholmodCommon() { cholmod_start(&common_); }
+  ~CholmodCommon() { cholmod_finish(&common_); }
+  CholmodCommon(const CholmodCommon&) = delete;
+  CholmodCommon& operator=(const CholmodCommon&) = delete;
+  cholmod_common& get() { return common_; }
+
+private:
+  cholmod_common common_{};
+};
+
+/// A CHOLMOD factor, freed with the workspace that made it on every path out.
+class CholmodFactor {
+public:
+  CholmodFactor(cholmod_factor* factor, cholmod_common& common)
+      : factor_(factor), common_(&common) {}
+  ~CholmodFactor() {
+    if (factor_ != nullptr) {
+      cholmod_free_factor(&factor_, common_);
+    }
+  }
+  CholmodFactor(const CholmodFactor&) = delete;
+  CholmodFactor& operator=(const CholmodFactor&) = delete;
+  cholmod_factor* get() const { return factor_; }
+
+private:
+  cholmod_factor* factor_;
+  cholmod_common* common_;
+};
+
 /// A fill-reducing ordering of K's unknowns that keeps each group's unknowns together (a
 /// particle's components), found on the graph of the groups: CHOLMOD's own choice (AMD, and METIS
 /// where AMD fills badly) on a graph with nine times fewer entries than K's. Ordering K itself
@@ -98,21 +131,20 @@ std::vector<int> group_ordering(const SparseMatrix& K, const std::vector<std::si
   pattern.dtype = CHOLMOD_DOUBLE;
   pattern.sorted = 1;
   pattern.packed = 1;
-  cholmod_factor* symbolic = cholmod_analyze(&pattern, &common);
-  if (symbolic == nullptr) {
+  const CholmodFactor symbolic(cholmod_analyze(&pattern, &common), common);
+  if (symbolic.get() == nullptr) {
     return {};
   }
   ordering = common.method[common.selected].ordering;
   std::vector<int> order;
   order.reserve(n);
-  const int* perm = static_cast<const int*>(symbolic->Perm);
+  const int* perm = static_cast<const int*>(symbolic.get()->Perm);
   for (std::size_t k = 0; k < groups; ++k) {
     const auto g = static_cast<std::size_t>(perm[k]);
     for (std::size_t j = first[g]; j < first[g + 1]; ++j) {
       order.push_back(static_cast<int>(j));
     }
   }
-  cholmod_free_factor(&symbolic, &common);
   return order;
 }
 
@@ -123,18 +155,20 @@ constexpr std::size_t threaded_blas_entries = 20'000'000;
 class Cholmod final : public SparseFactorisation {
 public:
   Cholmod(const SparseMatrix& K, const std::vector<std::size_t>& group) {
-    cholmod_start(&common_);
-    common_.supernodal = CHOLMOD_SUPERNODAL;
-    common_.final_asis = 1;
+    cholmod_common& common = workspace_.get();
+    common.supernodal = CHOLMOD_SUPERNODAL;
+    common.final_asis = 1;
     const auto start = std::chrono::steady_clock::now();
     cholmod_sparse A = view(K);
-    std::vector<int> order = group_ordering(K, group, common_, ordering_);
+    std::vector<int> order = group_ordering(K, group, common, ordering_);
     if (!order.empty()) {
-      common_.nmethods = 1;
-      common_.method[0].ordering = CHOLMOD_GIVEN;
-      common_.postorder = 1;
+      common.nmethods = 1;
+      common.method[0].ordering = CHOLMOD_GIVEN;
+      common.postorder = 1;
     }
-    factor_ = cholmod_analyze_p(&A, order.empty() ? nullptr : order.data(), nullptr, 0, &common_);
+    holder_.emplace(
+        cholmod_analyze_p(&A, order.empty() ? nullptr : order.data(), nullptr, 0, &common), common);
+    factor_ = holder_->get();
     if (factor_ == nullptr) {
       singular("the analysis of the Cholesky factorisation (CHOLMOD)");
     }
@@ -153,14 +187,10 @@ public:
     if (factor_nonzeros() < threaded_blas_entries) {
       serial.emplace();
     }
-    if (!cholmod_factorize(&A, factor_, &common_) || common_.status != CHOLMOD_OK ||
+    if (!cholmod_factorize(&A, factor_, &common) || common.status != CHOLMOD_OK ||
         factor_->minor < factor_->n) {
       singular("the Cholesky factorisation (CHOLMOD)");
     }
-  }
-  ~Cholmod() override {
-    cholmod_free_factor(&factor_, &common_);
-    cholmod_finish(&common_);
   }
   Cholmod(const Cholmod&) = delete;
   Cholmod& operator=(const Cholmod&) = delete;
@@ -172,12 +202,13 @@ public:
     rhs.x = const_cast<double*>(b.data()); // CHOLMOD reads it only
     rhs.xtype = CHOLMOD_REAL;
     rhs.dtype = CHOLMOD_DOUBLE;
-    cholmod_dense* x = cholmod_solve(CHOLMOD_A, factor_, &rhs, &common_);
+    cholmod_common& common = workspace_.get();
+    cholmod_dense* x = cholmod_solve(CHOLMOD_A, factor_, &rhs, &common);
     if (x == nullptr) {
       throw std::runtime_error("static solve: CHOLMOD's triangular solves failed");
     }
     Eigen::VectorXd out = Eigen::Map<const Eigen::VectorXd>(static_cast<double*>(x->x), b.size());
-    cholmod_free_dense(&x, &common_);
+    cholmod_free_dense(&x, &common);
     return out;
   }
   double analysis_seconds() const override { return analysis_seconds_; }
@@ -224,8 +255,10 @@ private:
     return A;
   }
 
-  mutable cholmod_common common_{};
-  cholmod_factor* factor_ = nullptr;
+  // Declared in this order so that the factor is freed before its workspace is finished.
+  mutable CholmodCommon workspace_;
+  std::optional<CholmodFactor> holder_;
+  cholmod_factor* factor_ = nullptr; ///< holder_'s factor (set once analysed)
   double analysis_seconds_ = 0;
   int ordering_ = -1; ///< CHOLMOD's ordering method of the particles (-1: CHOLMOD's own of K)
 };

@@ -63,6 +63,13 @@ TEST(ParticleFile, NonFiniteOrNonNumericValueIsRefusedWithItsRow) {
             "p.csv:3: 'abc' in column 'y' is not a number");
 }
 
+// Issue 38, item 11: a NUL byte in a cell cut the message there (what() is a C string).
+TEST(ParticleFile, ANulByteInACellIsShownNotCutAt) {
+  using namespace std::string_literals;
+  EXPECT_EQ(error_of("x,y,volume\n0,0,1\n1,0\0junk,1\n"s),
+            "p.csv:3: '0\\x00junk' in column 'y' is not a number");
+}
+
 TEST(ParticleFile, NegativeOrZeroVolumeAndSizeAreRefused) {
   EXPECT_EQ(error_of("x,y,volume\n0,0,1\n1,0,-2e-4\n"), "p.csv:3: volume -0.0002 is not positive");
   EXPECT_EQ(error_of("x,y,volume\n0,0,0\n"), "p.csv:2: volume 0 is not positive");

@@ -4,6 +4,7 @@
 #include "libpd/io/scene.hpp"
 #include "scene_test_support.hpp"
 
+#include <chrono>
 #include <filesystem>
 #include <fstream>
 #include <gtest/gtest.h>
@@ -1315,6 +1316,27 @@ TEST(SceneParser, ParticleFileBodyIsReadAndBuilt) {
   EXPECT_GT(m.family.directed_bond_count(), 0U);
 }
 
+// Issue 38, item 7: a particle file's body was estimated as the lattice points of its bounding
+// box (192,000 particles passed as 300), so the memory guard never saw its size.
+TEST(SceneParser, ParticleFileCountsInTheMemoryGuard) {
+  std::string csv = "x,y,volume\n";
+  for (int j = 0; j < 150; ++j) {
+    for (int i = 0; i < 150; ++i) {
+      csv += std::to_string(0.001 * i) + "," + std::to_string(0.001 * j) + ",1e-6\n";
+    }
+  }
+  const std::string text = particle_scene(csv, "virtual-fibres");
+  ASSERT_EQ(pd::parse_scene(text, "s.yaml").model.bodies.front().points->count(), 22500U);
+  ::setenv("PD_MEMORY_LIMIT", "2M", 1);
+  try {
+    pd::parse_scene(text, "s.yaml");
+    ADD_FAILURE() << "22,500 particles passed a 2 MiB limit";
+  } catch (const pd::SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find("22500 particles"), std::string::npos) << e.what();
+  }
+  ::unsetenv("PD_MEMORY_LIMIT");
+}
+
 TEST(SceneParser, ParticleFileWithBadContentIsRefusedNamingFileAndRow) {
   const std::string text =
       particle_scene("x,y,volume\n0,0,0.01\n0.1,0,0.01\n0,0,0.01\n", "virtual-fibres");
@@ -1368,6 +1390,30 @@ TEST(SceneParser, GradedBodyIsGeneratedDeterministically) {
   EXPECT_EQ(a.model.bodies.front().points->position, b.model.bodies.front().points->position);
   const pd::Model m = pd::build_model(a.model);
   EXPECT_EQ(m.size(), 8U * 6U * 9U);
+}
+
+// Issue 38, item 7: a graded set was made before any guard saw it: zones × pattern overflowed an
+// int (SIGSEGV), 10^12 particles ended in std::bad_alloc after 18 s, a huge grading hung.
+TEST(SceneParser, GradedSetsAreBoundedBeforeTheyAreMade) {
+  const auto refused = [](const std::string& graded, const std::string& words) {
+    const auto t0 = std::chrono::steady_clock::now();
+    try {
+      pd::parse_scene(graded_scene(graded), "s.yaml");
+      ADD_FAILURE() << "accepted: " << graded;
+    } catch (const pd::SceneError& e) {
+      EXPECT_NE(std::string(e.what()).find(words), std::string::npos) << e.what();
+    }
+    EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 5.0)
+        << graded;
+  };
+  refused("      focal_half_distance: 0.0416667\n      zones: [1000, 1]\n      pattern: 3000000\n",
+          "more than 1e+06 particles");
+  refused("      focal_half_distance: 0.0416667\n      zones: [1000000, 1000000]\n",
+          "more than 1e+06 particles");
+  refused("      shape: box\n      box: [[0, 0], [1, 0.5]]\n      grading: 1e300\n", "particles");
+  ::setenv("PD_MEMORY_LIMIT", "1M", 1); // 40 × 20 zones of 5 × 5: 20,000 particles, 1.8 MiB
+  refused("      focal_half_distance: 0.0416667\n", "are allowed by PD_MEMORY_LIMIT");
+  ::unsetenv("PD_MEMORY_LIMIT");
 }
 
 TEST(SceneParser, GradedBodyErrorsNameTheLine) {

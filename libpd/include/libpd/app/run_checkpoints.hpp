@@ -35,6 +35,17 @@ std::filesystem::path rank_file(const std::filesystem::path& path, const Communi
 /// suffix.
 std::filesystem::path checkpoint_base_path(const RunOptions& options);
 
+/// A split run's checkpoint set is replaced in two phases, so that a rank killed at any moment
+/// leaves a complete set: every rank writes its new piece to next_piece(piece); once all have,
+/// rank 0 creates set_marker(base) (the new set is complete); every rank renames its next piece
+/// into place; rank 0 removes the marker. A restart first finishes or undoes an interrupted
+/// replacement (recover_checkpoint_set): with the marker the next pieces are the set, without
+/// it the pieces in place are.
+std::filesystem::path next_piece(const std::filesystem::path& piece);
+std::filesystem::path set_marker(const std::filesystem::path& base);
+/// On every rank of `comm` (collective), before the pieces of `base` are read.
+void recover_checkpoint_set(const std::filesystem::path& base, const Communicator& comm);
+
 class CheckpointPolicy {
 public:
   /// Refuses up front (CheckpointError) what cannot be continued bitwise, rather than after
@@ -63,6 +74,8 @@ public:
                       std::vector<VtuFrame>& frames);
 
 private:
+  const Communicator* comm_;
+  std::filesystem::path base_;
   std::filesystem::path file_;
   std::size_t every_ = 0;
   bool file_given_ = false;

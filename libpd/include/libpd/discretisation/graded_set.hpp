@@ -54,6 +54,21 @@ struct GradedSetSpec {
   std::uint64_t seed = 1;
 };
 
+/// How many particles generate_graded_set(spec) makes, counted in floating point without making
+/// them (infinite when the grading leaves a zone no width): what the memory guard and the 32-bit
+/// limit are checked against first.
+double graded_set_size(const GradedSetSpec& spec);
+
+/// Above this many particles a graded set is refused before it is made: its relaxation sweeps
+/// (nearest neighbours of every particle, several times) take minutes at this size already (80,000
+/// particles: 20 s with the model), the sets of the paper have 10^4 to 10^5, and counting up to
+/// it costs at most this many cheap column evaluations.
+constexpr double max_graded_particles = 1e6;
+
+/// Memory the generation of a graded set takes per particle, beyond the particles themselves:
+/// position, volume, size and the twelve neighbours its relaxation checks.
+constexpr double graded_bytes_per_particle = 3 * 8 + 8 + 8 + 12 * 4;
+
 /// The particles of `spec` in 2D (z = 0), volumes × `thickness`, sizes h from eq. 115 after the
 /// relaxation. Throws std::invalid_argument for a spec that describes no body.
 PointCloud generate_graded_set(const GradedSetSpec& spec, double thickness);

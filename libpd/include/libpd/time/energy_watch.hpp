@@ -50,6 +50,7 @@ private:
   double initial_ = 0;
   double work_loads_ = 0;
   double work_supports_ = 0;
+  double unresolved_ = 0; ///< load work below the positions' round-off, summed over the checks
 };
 
 } // namespace pd

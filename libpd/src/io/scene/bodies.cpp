@@ -1,10 +1,12 @@
 // The `bodies` list: regions of the lattice or particle files, each made of one material.
 #include "bind.hpp"
+#include "libpd/core/memory.hpp"
 #include "libpd/discretisation/graded_set.hpp"
 #include "libpd/io/particle_file.hpp"
 #include "sections.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <memory>
 
@@ -174,8 +176,38 @@ void read_graded_body(Reader& r, const Fields& body_fields, const ModelSpec& mod
       r.fail(b->at(), fmt::format("{} has no area", f.label("box")), "give lo < hi in x and y");
     }
   }
-  body.points =
-      std::make_shared<const PointCloud>(generate_graded_set(spec, model.dimension.thickness));
+  // Counted before it is made: a set too large for the memory (or too large to index) is refused
+  // in microseconds, not found out by std::bad_alloc after minutes.
+  const double count = graded_set_size(spec);
+  std::optional<MemoryBudget> budget;
+  try {
+    budget = available_memory();
+  } catch (const std::invalid_argument&) {
+    // A malformed PD_MEMORY_LIMIT is reported by the scene's memory check.
+  }
+  const double bytes = count * graded_bytes_per_particle;
+  const bool too_many = !(count <= max_graded_particles);
+  if (too_many || (budget && !(bytes <= budget->bytes))) {
+    const std::string how_many =
+        !std::isfinite(count) ? std::string("infinitely many (the grading leaves a zone no width)")
+        : too_many            ? fmt::format("more than {:.0e}", max_graded_particles)
+                              : fmt::format("about {:.3g}", count);
+    const std::string why =
+        too_many
+            ? fmt::format("; at most {:.0e} are generated", max_graded_particles)
+            : fmt::format(", {} to generate; {} {}", format_bytes(bytes),
+                          format_bytes(budget->bytes),
+                          budget->source == "PD_MEMORY_LIMIT" ? "are allowed by PD_MEMORY_LIMIT"
+                                                              : "are available");
+    r.fail(at, fmt::format("this graded set has {} particles{}", how_many, why),
+           "lower 'zones' or 'pattern' (particles grow as zones × pattern²), or the grading");
+  }
+  try {
+    body.points =
+        std::make_shared<const PointCloud>(generate_graded_set(spec, model.dimension.thickness));
+  } catch (const std::invalid_argument& e) {
+    r.fail(at, e.what(), "lower 'zones' or 'pattern', or the grading");
+  }
   Box bounds{body.points->position.front(), body.points->position.front()};
   for (const Vec3& p : body.points->position) {
     for (std::size_t a = 0; a < 3; ++a) {

@@ -184,7 +184,9 @@ void check_regions(const Reader& r, const ModelSpec& model, const Marks& marks) 
     for (std::size_t j = 0; j < i; ++j) {
       const BodySpec& a = model.bodies[j];
       const BodySpec& b = model.bodies[i];
-      if (a.material == b.material) {
+      // A shaped or holed body's boxes are not its region (a hole may hold the other body):
+      // those pairs are checked on the generated particles (check_shaped_bodies).
+      if (a.material == b.material || !a.region.only_boxes() || !b.region.only_boxes()) {
         continue;
       }
       for (std::size_t k = 0; k < b.region.boxes.size(); ++k) {

@@ -179,6 +179,28 @@ void read_cracks(Reader& r, ModelSpec& model, Marks& marks) {
         }
       }
     }
+    // A crack away from every body cuts no bond: almost surely a coordinate slip (a unit, a sign).
+    Box bounds{c.vertices.front(), c.vertices.front()};
+    for (const Vec3& p : c.vertices) {
+      for (int a = 0; a < r.dim; ++a) {
+        bounds.lo[a] = std::min(bounds.lo[a], p[a]);
+        bounds.hi[a] = std::max(bounds.hi[a], p[a]);
+      }
+    }
+    const double reach = model.lattice.spacing;
+    bool near_a_body = false;
+    for (const BodySpec& body : model.bodies) {
+      for (const Box& b : body.region.cover(r.dim)) {
+        bool meets = true;
+        for (int a = 0; a < r.dim; ++a) {
+          meets = meets && bounds.lo[a] <= b.hi[a] + reach && b.lo[a] - reach <= bounds.hi[a];
+        }
+        near_a_body = near_a_body || meets;
+      }
+    }
+    if (!near_a_body) {
+      r.warn(n, fmt::format("crack '{}' lies outside every body: it cuts no bond", c.name));
+    }
     model.cracks.push_back(std::move(c));
   }
 }
