@@ -255,8 +255,9 @@ int run_parameter_file(const Arguments& args, const std::string& command_line) {
 
 int main(int argc, char** argv) {
   using namespace dealii;
-  // The direct solves run CHOLMOD on OpenBLAS: its fast kernels on CPUs it does not recognise.
-  pd::restart_with_this_cpus_blas_kernels(argv);
+  // The direct solves run CHOLMOD on OpenBLAS: its fast kernels on CPUs it does not recognise,
+  // and passive OpenMP waiting on a busy machine (libpd/core/blas.hpp).
+  pd::restart_with_process_settings(argv);
   try {
     // Trilinos (Epetra) matrices need MPI to be initialised; one process,
     // threads for the assembly (all cores unless DEAL_II_NUM_THREADS).
