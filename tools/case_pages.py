@@ -19,7 +19,8 @@ import yaml
 
 ROOT = Path(__file__).resolve().parent.parent
 # What each ctest label means for a reader of the page.
-LABELS = {"verification": "default test run", "verification-full": "report only"}
+LABELS = {"verification": "default test run", "verification-full": "report only",
+          "none": "no ctest test (the report and `pd verify --sweep` run it)"}
 KINDS = {"code": "written in C++", "structure": "a structure against deal.II",
          "scene": "a scene against deal.II"}
 

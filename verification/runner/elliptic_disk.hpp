@@ -36,7 +36,7 @@ enum class DiskParticles { graded, uniform };
 /// A band along the crack's line, |x| ≤ half_length and |y| ≤ half_width, filled with a regular
 /// lattice of one spacing in place of the particles there. The paper's grading (eq. 114) refines
 /// the initial tips only, so a crack that grows before the peak load runs into ever coarser
-/// zones and the peak is set by where the grading stops it (GRIFFITH.md); with the band, the
+/// zones and the peak is set by where the grading stops it (docs/theory/griffith.md); with the band, the
 /// crack's whole path, its initial tips and the process zone ahead of them see one particle size
 /// in metres, the same for every crack length.
 struct PathBand {

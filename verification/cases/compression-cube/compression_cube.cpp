@@ -14,7 +14,7 @@
 // 0.8 and 1.2 times it and the s0 that eq. 11 gives for the fib Model Code 2010 fracture energy
 // G_F = 73 f_cm^0.18. Bond-based PD with ν = 1/4 makes the compressive strength of a brittle
 // specimen a few times f_ct (lateral stretch ν ε), far below concrete's f_c/f_ct ≈ 15: see
-// QUASI_BRITTLE.md.
+// docs/theory/quasi-brittle.md.
 #include "curve_recorder.hpp"
 #include "libpd/io/scene.hpp"
 #include "libpd/physics/material.hpp"
@@ -207,7 +207,7 @@ CubeRun run_cube(const Scene& scene, const std::filesystem::path& dir, bool full
 } // namespace
 
 /// compression-cube-static: the main run's curve by the static solver with break events beside
-/// the same curve by ADR, in one run (QUASI_BRITTLE.md, "Static against ADR").
+/// the same curve by ADR, in one run (docs/theory/quasi-brittle.md, "Static against ADR").
 Json run_compression_cube_static(const Context& ctx) {
   const auto start = std::chrono::steady_clock::now();
   const Scene scene = load_scene((ctx.folder / "compression-cube.yaml").string());
@@ -234,7 +234,7 @@ Json run_compression_cube_static(const Context& ctx) {
   out["comparison"] = c;
   finish_case(out,
               "reported: both runs complete to the full closure; the peak difference is reported "
-              "against the scatter QUASI_BRITTLE.md states, not gated",
+              "against the scatter docs/theory/quasi-brittle.md states, not gated",
               stat.completed && adr.completed, start);
   return out;
 }

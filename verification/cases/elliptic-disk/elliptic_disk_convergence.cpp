@@ -30,7 +30,7 @@
 // paper's grid, 20 × 40 zones, 3…7 particles per side (7,200 … 39,200), Fig. 10's densities.
 //
 // Measured, and the diagnosis of what did not converge before the relaxed moduli
-// (fibre_relaxation.cpp): ELLIPTIC_DISK.md. In short (2026-11-28, seed 1, --threads 1), RMS
+// (fibre_relaxation.cpp): docs/theory/elliptic-disk.md. In short (seed 1, --threads 1), RMS
 // error and crack opening ratio:
 //   elliptic-disk             1,800 … 7,200: 1.79, 1.41, 1.12, 0.89 %, openings 0.9987–1.0001,
 //                             order 1.00 in spacing (seeds 2–5: 1.06–1.28).

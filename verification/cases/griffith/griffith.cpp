@@ -27,7 +27,7 @@
 //   crack then at twice its δ_e/c). The pair at half that δ_e (the short crack at the sweep's
 //   smallest δ_e/c) is reported beside it (`crack_length_scaling_half_delta`). The CI disk only
 //   reports the ratio: without the path band below it moved from +0.9 % to −12.3 % between two
-//   resolutions (GRIFFITH.md).
+//   resolutions (docs/theory/griffith.md).
 // - Why c/2 in the same disk, not the disk scaled with its crack: a scaled disk with fixed δ_e
 //   is, by dimensional analysis, exactly the first disk at δ_e/2 (every length scales, ε^p·L > δ_e
 //   becomes ε^p·L > δ_e/2), so it would repeat a point of the sweep and test nothing new. Keeping
@@ -54,12 +54,12 @@
 // Each increment's plastic flow is recomputed from its start (time/quasi_static.cpp), so ADR's
 // path to equilibrium leaves none of its own; before that, σ_f at c/3250 rose 25 % from path
 // spacing c/32 to c/64 and the ratio failed the gate there (−11.4 %). With the relaxed moduli of
-// the noisy particles (discretisation/fibre_relaxation.cpp, 2026-11-28) the ratio is −3.3 % at
+// the noisy particles (discretisation/fibre_relaxation.cpp) the ratio is −3.3 % at
 // c/32 and +1.4 % at c/64 (+1.9 % on the larger disk of griffith-boundary). σ_f itself settles
 // once the horizon is below about 0.6 of the process zone (≈ 216 δ_e; measured before the
 // relaxed moduli: at δ_e = c/1500 it moved 10 % from c/32 to c/64 and 1.5 % to c/96); at c/3250
 // (zone ≈ 0.07 c, horizon 0.16 c … 0.05 c) it still rises with refinement. Numbers and commands:
-// verification/cases/GRIFFITH.md.
+// docs/theory/griffith.md.
 #include "curve_recorder.hpp"
 #include "elliptic_disk.hpp"
 #include "libpd/io/scene.hpp"
@@ -355,7 +355,7 @@ struct Variant {
   Stepping stepping;
   std::vector<int> divisors; ///< δ_e = c/divisor for the sweep, the last the smallest δ_e
   /// The c^(−1/2) ratio is a gate (else reported): not on a disk so coarse that the ratio moves
-  /// by more than the gate between it and the next resolution (GRIFFITH.md).
+  /// by more than the gate between it and the next resolution (docs/theory/griffith.md).
   bool scaling_gated = true;
   bool fit_gated = true;       ///< R² gated (a sensitivity variant runs one δ_e, no line)
   bool half_delta_pair = true; ///< also the pair at half the smallest δ_e (reported)
@@ -492,7 +492,7 @@ Json run_variant(const Context& ctx, const Variant& v) {
 }
 
 /// The elongation limits of the full sweeps: c/750 … c/3250 in steps of c/250, eleven values
-/// (§10.4 steps Fig. 14 by c/250 from c/500; GRIFFITH.md says why the sweeps start at c/750).
+/// (§10.4 steps Fig. 14 by c/250 from c/500; docs/theory/griffith.md says why the sweeps start at c/750).
 std::vector<int> fig14_sweep() {
   std::vector<int> divisors;
   for (int k = 750; k <= 3250; k += 250) {
@@ -514,7 +514,7 @@ Variant finer_variant(std::string name, std::array<int, 3> zones, std::vector<in
   return v;
 }
 
-/// The disk of the gated c^(−1/2) comparison (GRIFFITH.md, "Design"): zones of Δξ = 0.1 and
+/// The disk of the gated c^(−1/2) comparison (docs/theory/griffith.md, "Design"): zones of Δξ = 0.1 and
 /// Δη = 2π/20 with 4 × 4 particles out to `xi_max` (≥ 2.7: the boundary zone several plastic
 /// zones away from either crack), and the crack's path |x| ≤ 2c, |y| ≤ c/2 at the one spacing
 /// c/`per_c` for both crack lengths, so that neither the disk's edge nor its grading sets where
@@ -548,7 +548,7 @@ Json run_griffith_boundary(const Context& ctx) {
   // griffith-resolution's c^(−1/2) pair on a larger disk: does the failure stress still move
   // with it? At the path spacing of griffith-resolution, c/64, where the horizon is below the
   // c/3250 process zone: at griffith-full's c/32 it is not, and the pair moved from −3.3 % to
-  // −6.1 % with the boundary, against +1.4 % and +1.9 % at c/64 (GRIFFITH.md, 2026-11-28).
+  // −6.1 % with the boundary, against +1.4 % and +1.9 % at c/64 (docs/theory/griffith.md).
   Variant v = path_variant("griffith-boundary", 3.2, 64, {3250});
   v.fit_gated = false;
   v.half_delta_pair = false;
@@ -568,13 +568,13 @@ Json run_griffith_table1(const Context& ctx) {
   // Table 1's particle density (the builder's reading: 5 × 5 particles in zones of Δξ = π/40,
   // Δη = π/20) on this case's ξ_max = 2: 25 × 40 zones, 25,000 particles, and the full sweep:
   // its R² gate is the issue's, which is about eight or more elongation limits. It fails both
-  // gates (2026-11-28: R² 0.9736, pair +7.4 %): the five largest δ_e fail above σ_y, far from
+  // gates (R² 0.9736, pair +7.4 %): the five largest δ_e fail above σ_y, far from
   // small-scale yielding (the six below give R² 0.998), and without the path band the crack
-  // grows into the grading's coarser zones. GRIFFITH.md has the numbers.
+  // grows into the grading's coarser zones. docs/theory/griffith.md has the numbers.
   Variant v = finer_variant("griffith-table1", {25, 40, 5}, fig14_sweep());
   // At this density, without the path band, the c/750 crack still holds at S = 2 σ_y (σ_b/S
   // 0.68: the plate yields widely) since each increment's plastic flow is recomputed from its
-  // start (GRIFFITH.md); the load goes on until it runs.
+  // start (docs/theory/griffith.md); the load goes on until it runs.
   v.stepping.last = 3.0;
   return run_variant(ctx, v);
 }

@@ -20,7 +20,7 @@
 //
 // `poisson-control` runs every ν at the default resolution (3D: 10 particles across; plane
 // strain: 20); `poisson-control-full` (label verification-full) adds a coarser section, reported
-// but not gated, and a finer one. Measured (2026-11-25), lateral contraction error:
+// but not gated, and a finer one. Measured, lateral contraction error:
 //   3D   6 across +11.4 / +4.5 / +3.0 %, 10 across −1.98 / −0.86 / −0.74 %, 16 across −0.41 /
 //        −0.06 / +0.03 % (ν = 0.1 / 0.3 / 0.45)
 //   plane strain 10 across −2.3 / −1.0 / −1.0 %, 20 across +0.07 / +0.08 / +0.06 %, 40 across

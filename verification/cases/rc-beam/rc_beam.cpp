@@ -17,7 +17,7 @@
 //
 // Resolution and cost: λ = 25 mm (2,592 particles with the plates) against the paper's 13.5 k
 // particles; the case must finish in ≤ 6 min on 2 threads, so the s0 sensitivity runs (0.8 s0,
-// 1.2 s0) stop once the load has fallen 30 % below the peak. See QUASI_BRITTLE.md for the
+// 1.2 s0) stop once the load has fallen 30 % below the peak. See docs/theory/quasi-brittle.md for the
 // geometry (the paper's Figure 16 is not in our text), the derivation of s0 and the numbers.
 #include "curve_recorder.hpp"
 #include "libpd/io/scene.hpp"
@@ -304,7 +304,7 @@ BeamRun run_beam(const Scene& scene, const std::filesystem::path& dir, bool full
 
 /// rc-beam-static: the main run's curve by the static solver with break events
 /// (quasi_static::Method::static_) beside the same curve by ADR, in one run: peaks, the curves'
-/// difference up to the peak and the wall times (QUASI_BRITTLE.md, "Static against ADR").
+/// difference up to the peak and the wall times (docs/theory/quasi-brittle.md, "Static against ADR").
 Json run_rc_beam_static(const Context& ctx) {
   const auto start = std::chrono::steady_clock::now();
   const Scene scene = load_scene((ctx.folder / "rc-beam.yaml").string());
@@ -319,7 +319,7 @@ Json run_rc_beam_static(const Context& ctx) {
   BeamRun adr = run_beam(scene, dir / "adr", true, ctx.progress, 0, quasi_static::Method::adr);
   out["static"] = stat.json;
   out["adr"] = adr.json;
-  // The beam's peak is its largest load (QUASI_BRITTLE.md): no drop ends the search.
+  // The beam's peak is its largest load (docs/theory/quasi-brittle.md): no drop ends the search.
   Json c = compare_with_adr(adr.loads, stat.loads, adr.displacements, 1.0);
   c["static_wall_seconds"] = *stat.json.find("wall_seconds")->number();
   c["adr_wall_seconds"] = *adr.json.find("wall_seconds")->number();
@@ -332,7 +332,7 @@ Json run_rc_beam_static(const Context& ctx) {
   out["comparison"] = c;
   finish_case(out,
               "reported: both runs complete to 20 mm; the peak difference is reported against "
-              "the scatter QUASI_BRITTLE.md states, not gated",
+              "the scatter docs/theory/quasi-brittle.md states, not gated",
               stat.completed && adr.completed, start);
   return out;
 }
