@@ -258,6 +258,31 @@ private:
     return bytes_op(text, log);
   }
 
+  /// Removes a key of a map, or an item of a list (the list is rebuilt without it).
+  void delete_item(std::vector<Slot>& slots, std::vector<std::string>& log) {
+    Slot s = choose(slots);
+    log.push_back("delete " + s.path);
+    if (s.in_map) {
+      s.parent.remove(s.key);
+      return;
+    }
+    YAML::Node seq(YAML::NodeType::Sequence);
+    for (std::size_t i = 0; i < s.parent.size(); ++i) {
+      if (i != s.index) {
+        seq.push_back(s.parent[i]);
+      }
+    }
+    Slot* up = nullptr; // the last slot holding the list, as the fuzzer always chose it
+    for (Slot& o : slots) {
+      if (o.node.is(s.parent)) {
+        up = &o;
+      }
+    }
+    if (up != nullptr) {
+      assign(*up, seq);
+    }
+  }
+
   std::string tree_op(int op, YAML::Node& root, std::vector<Slot>& slots,
                       std::vector<std::string>& log) {
     auto find = [&](const std::string& path) -> Slot* {
@@ -269,30 +294,9 @@ private:
       return nullptr;
     };
     switch (op) {
-    case 0: { // delete a key or a list item
-      Slot s = choose(slots);
-      log.push_back("delete " + s.path);
-      if (s.in_map) {
-        s.parent.remove(s.key);
-      } else {
-        YAML::Node seq(YAML::NodeType::Sequence);
-        for (std::size_t i = 0; i < s.parent.size(); ++i) {
-          if (i != s.index) {
-            seq.push_back(s.parent[i]);
-          }
-        }
-        Slot* up = nullptr;
-        for (Slot& o : slots) {
-          if (o.node.is(s.parent)) {
-            up = &o;
-          }
-        }
-        if (up != nullptr) {
-          assign(*up, seq);
-        }
-      }
+    case 0: // delete a key or a list item
+      delete_item(slots, log);
       break;
-    }
     case 1:
     case 2: { // replace a scalar (numbers more often: they carry the ranges)
       std::vector<Slot> scalars;
