@@ -65,9 +65,9 @@ public:
   Ledger(const std::string& out_dir, std::vector<std::string> names)
       : dir_(out_dir), names_(std::move(names)), verdicts_(names_.size()) {}
 
-  void finish(std::size_t k, bool passed) { finish(k, passed ? "passed" : "failed"); }
+  void finish(std::size_t k, bool passed) { record(k, passed ? "passed" : "failed"); }
   /// A scene's verdict: passed, failed or measured (scene_verification.hpp).
-  void finish(std::size_t k, const std::string& verdict) {
+  void record(std::size_t k, const std::string& verdict) {
     const std::lock_guard lock(mutex_);
     verdicts_[k] = verdict;
   }
@@ -154,7 +154,7 @@ int verify_scenes(const VerifyArgs& a, const verification::Context& ctx) {
     if (verdict == "measured") {
       fmt::print("   (no --gate: the differences are measured, not judged)\n");
     }
-    ledger.finish(k, verdict);
+    ledger.record(k, verdict);
     failed += verdict == "failed" ? 1 : 0;
   }
   return conclude(ledger, interrupt, a.cases.size(), failed);
