@@ -17,6 +17,7 @@ import pdcli
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 SCENES = os.path.join(ROOT, "verification", "scenes")
+CASES = os.path.join(ROOT, "verification", "cases")
 BOUND_SECONDS = 2.0
 rng = random.Random(41)
 
@@ -57,11 +58,11 @@ class Interrupts(pdcli.TestCase):
     def test_static_plate_in_set_up_or_factorisation(self):
         for sig in (signal.SIGTERM, signal.SIGINT):
             out = self.path(f"plate-{int(sig)}")
-            self.check(["run", os.path.join(SCENES, "plate-3clamped.yaml"), "-o", out],
+            self.check(["run", os.path.join(CASES, "plate-3clamped", "plate-3clamped.yaml"), "-o", out],
                        0.05, 2.5, os.path.join(out, "summary.json"), sig)
 
     def test_adr_beam(self):
-        with open(os.path.join(SCENES, "clamped-beam.yaml")) as f:
+        with open(os.path.join(CASES, "clamped-beam", "clamped-beam.yaml")) as f:
             text = f.read().replace("integrator: static", "integrator: adr")
         scene = self.scene(name="clamped-beam-adr.yaml", text=text)
         for sig in (signal.SIGTERM, signal.SIGHUP):

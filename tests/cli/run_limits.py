@@ -12,8 +12,8 @@ import time
 
 import pdcli
 
-SCENES = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "verification",
-                      "scenes")
+CASES = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "verification",
+                     "cases")
 
 
 class RunLimits(pdcli.TestCase):
@@ -21,7 +21,7 @@ class RunLimits(pdcli.TestCase):
     # of the loads 0 J": its particles moved less than their positions' round-off, so the work
     # fed into its kinetic energy was seen nowhere. Δt was within the limit.
     def test_motion_below_round_off_is_not_an_instability(self):
-        with open(os.path.join(SCENES, "cantilever-2d.yaml"), encoding="utf-8") as f:
+        with open(os.path.join(CASES, "cantilever-2d", "cantilever-2d.yaml"), encoding="utf-8") as f:
             text = f.read()
         text = text.replace("    density: 2400\n", "    density: 2400\n    stiffness_factor: 1e12\n")
         text = re.sub(r"\n  integrator: static\n", "\n  integrator: verlet\n  end_time: 1e-8\n",
