@@ -31,6 +31,7 @@ namespace {
 pd::ModelSpec model_a(pd::StretchKind stretch, bool damage, bool plasticity, bool per_bond,
                       double length = 4.1) {
   pd::ModelSpec s;
+  s.surface_correction = pd::SurfaceCorrection::none; // the bare model
   s.lattice.spacing = 0.05;
   s.lattice.horizon_factor = 2.0 * std::sqrt(3.0);
   s.lattice.convention = pd::LatticeConvention::node_based;
@@ -48,9 +49,7 @@ pd::ModelSpec model_a(pd::StretchKind stretch, bool damage, bool plasticity, boo
   s.effects.stretch = stretch;
   s.effects.damage = damage;
   s.effects.plasticity = plasticity;
-  if (per_bond) {
-    s.volume_correction = pd::VolumeCorrection::linear;
-  }
+  s.volume_correction = per_bond ? pd::VolumeCorrection::linear : pd::VolumeCorrection::none;
   return s;
 }
 

@@ -4,6 +4,8 @@
 
 int main() {
   pd::ModelSpec spec;
+  spec.surface_correction = pd::SurfaceCorrection::none; // the bare model
+  spec.volume_correction = pd::VolumeCorrection::none;
   spec.dimension.dim = 1;
   spec.lattice.spacing = 0.1;
   spec.lattice.horizon_factor = 3.015;

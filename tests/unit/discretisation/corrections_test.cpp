@@ -20,6 +20,8 @@ constexpr double pi = std::numbers::pi;
 
 pd::ModelSpec block_spec(int dim, double m, std::array<double, 3> size) {
   pd::ModelSpec spec;
+  spec.surface_correction = pd::SurfaceCorrection::none; // the bare model
+  spec.volume_correction = pd::VolumeCorrection::none;
   spec.dimension.dim = dim;
   spec.lattice.spacing = 1.0;
   spec.lattice.horizon_factor = m;
@@ -600,6 +602,8 @@ pd::CorrectionSpec gradient_spec(int dim, pd::PlaneMode plane, double m, double 
   spec.dimension.plane = plane;
   spec.lattice.spacing = lambda;
   spec.lattice.horizon_factor = m;
+  spec.horizon_rule = pd::HorizonRule::inclusive;
+  spec.surface_correction = pd::SurfaceCorrection::none;
   spec.volume_correction = pd::VolumeCorrection::gradient;
   return spec;
 }

@@ -98,6 +98,7 @@ pd::ParticleSet graded_plate(double s0, double jitter, std::uint64_t seed) {
 
 pd::ModelSpec fibre_spec(pd::VolumeCorrection volume) {
   pd::ModelSpec s;
+  s.surface_correction = pd::SurfaceCorrection::none; // the bare model
   s.volume_correction = volume;
   s.dimension.dim = 2;
   s.dimension.plane = pd::PlaneMode::plane_strain;

@@ -436,6 +436,8 @@ TEST(WriteFileAtomically, FailedReplaceLeavesTargetAndNoTemporary) {
 /// A small 2D model, with damage so that the VTU also carries the damage array.
 pd::Model small_model(bool damage = true) {
   pd::ModelSpec s;
+  s.surface_correction = pd::SurfaceCorrection::none; // the bare model
+  s.volume_correction = pd::VolumeCorrection::none;
   s.dimension.dim = 2;
   s.dimension.thickness = 0.01;
   s.lattice.spacing = 0.01;

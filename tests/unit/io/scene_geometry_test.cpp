@@ -2,9 +2,11 @@
 // stress and damage probes, and solver.stop_when. Each class of bad input is refused at its node;
 // valid scenes fill the fields and build the model they describe.
 #include "libpd/app/run.hpp"
+#include "libpd/discretisation/model.hpp"
 #include "libpd/io/scene.hpp"
 #include "scene_test_support.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <gtest/gtest.h>
@@ -425,6 +427,193 @@ TEST(SceneGeometry, BoxOffTheCellFacesWarnsWithTheRepresentedVolume) {
             std::string::npos)
       << s.warnings[0];
   EXPECT_NE(s.warnings[0].find("(+2.44 %)"), std::string::npos) << s.warnings[0];
+}
+
+// ---- Library defaults -------------------------------------------------------------------------
+
+/// A ModelSpec{} given the scene's geometry (dimension, lattice, materials, bodies, supports,
+/// loads, cracks) and nothing else: the model options are the library's own defaults.
+pd::ModelSpec default_spec_with_geometry_of(const pd::ModelSpec& scene) {
+  pd::ModelSpec spec;
+  spec.dimension = scene.dimension;
+  spec.lattice = scene.lattice;
+  spec.materials = scene.materials;
+  spec.bodies = scene.bodies;
+  spec.supports = scene.supports;
+  spec.loads = scene.loads;
+  spec.cracks = scene.cracks;
+  return spec;
+}
+
+void expect_same_options(const pd::ModelSpec& a, const pd::ModelSpec& b) {
+  EXPECT_EQ(a.horizon_rule, b.horizon_rule);
+  EXPECT_EQ(a.surface_correction, b.surface_correction);
+  EXPECT_EQ(a.volume_correction, b.volume_correction);
+  EXPECT_EQ(a.mirror_coupling, b.mirror_coupling);
+  EXPECT_EQ(a.effects.bond_model, b.effects.bond_model);
+  EXPECT_EQ(a.effects.stretch, b.effects.stretch);
+  EXPECT_EQ(a.effects.damage, b.effects.damage);
+  EXPECT_EQ(a.effects.plasticity, b.effects.plasticity);
+  EXPECT_EQ(a.effects.per_bond_field, b.effects.per_bond_field);
+  EXPECT_EQ(a.effects.damping, b.effects.damping);
+  EXPECT_EQ(a.effects.body_force, b.effects.body_force);
+  EXPECT_EQ(a.fibre_kernel.exponent, b.fibre_kernel.exponent);
+  EXPECT_EQ(a.fibre_kernel.alpha, b.fibre_kernel.alpha);
+  EXPECT_EQ(a.fibre_kernel.size_neighbours, b.fibre_kernel.size_neighbours);
+}
+
+bool same_constraints(const std::vector<pd::Constraint>& a, const std::vector<pd::Constraint>& b) {
+  return std::equal(a.begin(), a.end(), b.begin(), b.end(), [](const auto& x, const auto& y) {
+    return x.particle == y.particle && x.component == y.component && x.value == y.value &&
+           x.mirror_of == y.mirror_of && x.mirror_sign == y.mirror_sign;
+  });
+}
+
+/// Bitwise the same model: particles, bonds, bond field, corrections (in the per-bond
+/// stiffness), constraints and extrapolated particles.
+void expect_same_model(const pd::Model& a, const pd::Model& b) {
+  EXPECT_EQ(a.ghost_count, b.ghost_count);
+  EXPECT_EQ(a.particles.position, b.particles.position);
+  EXPECT_EQ(a.particles.volume, b.particles.volume);
+  EXPECT_EQ(a.family.offsets, b.family.offsets);
+  EXPECT_EQ(a.family.neighbour, b.family.neighbour);
+  EXPECT_EQ(a.family.inverse_length, b.family.inverse_length);
+  EXPECT_EQ(a.effects.per_bond_field, b.effects.per_bond_field);
+  EXPECT_EQ(a.field.stiffness, b.field.stiffness);
+  EXPECT_EQ(a.field.bond_stiffness, b.field.bond_stiffness);
+  EXPECT_EQ(a.field.bond_critical_stretch, b.field.bond_critical_stretch);
+  EXPECT_EQ(a.field.bond_yield_stretch, b.field.bond_yield_stretch);
+  EXPECT_EQ(a.density, b.density);
+  EXPECT_EQ(a.external_force_density, b.external_force_density);
+  EXPECT_TRUE(same_constraints(a.constraints, b.constraints));
+  EXPECT_EQ(a.extrapolated.particle, b.extrapolated.particle);
+  EXPECT_EQ(a.extrapolated.offsets, b.extrapolated.offsets);
+  EXPECT_EQ(a.extrapolated.source, b.extrapolated.source);
+  EXPECT_EQ(a.extrapolated.coefficient, b.extrapolated.coefficient);
+  EXPECT_EQ(a.extrapolated.negated, b.extrapolated.negated);
+}
+
+TEST(LibraryDefaults, AreGhostGradientQuadratic) {
+  const pd::ModelSpec spec{};
+  EXPECT_EQ(spec.surface_correction, pd::SurfaceCorrection::ghost);
+  EXPECT_EQ(spec.volume_correction, pd::VolumeCorrection::gradient);
+  EXPECT_EQ(spec.mirror_coupling, pd::MirrorCoupling::quadratic);
+  EXPECT_EQ(spec.effects.bond_model, pd::BondModel::micro_elastic);
+}
+
+// A scene that names no key under `model` builds the model a ModelSpec{} of the same geometry
+// builds: the scene reader has no defaults of its own.
+TEST(LibraryDefaults, AnEmptyModelSectionIsModelSpecDefaults) {
+  const std::string box_3d = yaml(R"(
+dimension: 3
+lattice:
+  spacing: 0.01
+materials:
+  steel:
+    youngs_modulus: 200e9
+    density: 7800
+bodies:
+  - name: block
+    material: steel
+    box: [[0, 0, 0], [0.06, 0.04, 0.03]]
+loads:
+  - name: pull
+    box: [[0.05, 0, 0], [0.06, 0.04, 0.03]]
+    type: total
+    value: [1e3, 0, 0]
+)");
+  const std::string plane_strain = yaml(R"(
+dimension: 2
+plane: strain
+thickness: 0.01
+lattice:
+  spacing: 0.01
+materials:
+  steel:
+    youngs_modulus: 200e9
+    density: 7800
+bodies:
+  - name: plate
+    material: steel
+    box: [[0, 0], [0.1, 0.05]]
+supports:
+  - name: pin
+    box: [[0, 0], [0.01, 0.05]]
+    fixed: [x, y]
+)");
+  const std::string bar_1d = yaml(R"(
+dimension: 1
+lattice:
+  spacing: 0.1
+materials:
+  m:
+    youngs_modulus: 1e9
+    density: 1000
+bodies:
+  - name: bar
+    material: m
+    box: [[0], [2]]
+supports:
+  - name: clamp
+    box: [[0], [0.1]]
+    fixed: [x]
+)");
+  const std::string mirrored_2d = yaml(R"(
+dimension: 2
+plane: stress
+thickness: 0.1
+lattice:
+  spacing: 0.05
+materials:
+  steel:
+    youngs_modulus: 200e9
+    poisson_ratio: 0
+    density: 7800
+bodies:
+  - name: bar
+    material: steel
+    box: [[0, 0], [1, 0.2]]
+  - name: clamp
+    material: steel
+    box: [[-0.2, 0], [0, 0.2]]
+supports:
+  - name: clamp
+    box: [[-0.2, 0], [0, 0.2]]
+    mirror: {x: 0}
+)");
+  const std::string mirrored_3d = yaml(R"(
+dimension: 3
+lattice:
+  spacing: 0.01
+materials:
+  steel:
+    youngs_modulus: 200e9
+    density: 7800
+bodies:
+  - name: beam
+    material: steel
+    box: [[-0.03, 0, 0], [0.1, 0.03, 0.03]]
+supports:
+  - name: clamp
+    box: [[-0.03, 0, 0], [0, 0.03, 0.03]]
+    mirror: {x: 0}
+)");
+  const std::string symmetric = plate(R"(supports:
+  - name: sym
+    symmetry: {x: 0}
+  - name: pin
+    box: [[0, 0], [0.2, 0.01]]
+    fixed: [y]
+)");
+  const std::string solver_section = "solver:\n  end_time: 1\n";
+  for (const std::string& text :
+       {box_3d, plate(""), plane_strain, bar_1d, mirrored_2d, mirrored_3d, symmetric}) {
+    const pd::Scene scene = pd::parse_scene(text + solver_section, "s.yaml");
+    const pd::ModelSpec library = default_spec_with_geometry_of(scene.model);
+    SCOPED_TRACE(text);
+    expect_same_options(scene.model, library);
+    expect_same_model(pd::build_model(scene.model), pd::build_model(library));
+  }
 }
 
 } // namespace

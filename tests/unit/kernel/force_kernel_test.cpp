@@ -34,6 +34,8 @@ using pd::test::Combo;
 /// a single material.
 pd::ModelSpec spec_for(const Combo& c, int nx = 5, int ny = 4, int nz = 3) {
   pd::ModelSpec s;
+  s.surface_correction = pd::SurfaceCorrection::none; // the bare model
+  s.volume_correction = pd::VolumeCorrection::none;   // linear in the per-bond combos
   s.lattice.spacing = lambda;
   s.lattice.horizon_factor = m_factor;
   s.effects.stretch = c.stretch;

@@ -39,6 +39,8 @@ using pd::test::Combo;
 /// deformation below breaks some bonds and yields others.
 pd::ModelSpec spec_for(const Combo& c, int nx, int ny, int nz, double m_factor) {
   pd::ModelSpec s;
+  s.surface_correction = pd::SurfaceCorrection::none; // the bare model
+  s.volume_correction = pd::VolumeCorrection::none;   // linear in the per-bond combos
   s.lattice.spacing = lambda;
   s.lattice.horizon_factor = m_factor;
   s.effects.stretch = c.stretch;

@@ -28,6 +28,8 @@ pd::Material material(double stiffness_factor = 1.0, double density = rho) {
 /// material 1 (if there are two materials).
 pd::ModelSpec chain(int n, int soft, std::vector<pd::Material> materials) {
   pd::ModelSpec s;
+  s.surface_correction = pd::SurfaceCorrection::none; // the bare model
+  s.volume_correction = pd::VolumeCorrection::none;
   s.dimension.dim = 1;
   s.dimension.cross_section = area;
   s.lattice.spacing = lambda;

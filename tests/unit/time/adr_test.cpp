@@ -22,6 +22,7 @@ constexpr double lambda = 0.01;
 
 pd::ModelSpec chain(int n, bool load) {
   pd::ModelSpec s;
+  s.surface_correction = pd::SurfaceCorrection::none; // the bare model
   s.dimension.dim = 1;
   s.dimension.cross_section = 1e-4;
   s.lattice.spacing = lambda;
@@ -51,6 +52,7 @@ pd::ModelSpec chain(int n, bool load) {
 
 pd::ModelSpec block() {
   pd::ModelSpec s;
+  s.surface_correction = pd::SurfaceCorrection::none; // the bare model
   s.dimension.dim = 3;
   s.lattice.spacing = lambda;
   s.lattice.horizon_factor = 3.015;

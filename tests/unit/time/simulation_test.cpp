@@ -29,6 +29,8 @@ constexpr double rho = 1000;
 /// A 1D bar of n cell-centred particles on [0, nλ].
 pd::ModelSpec bar(int n) {
   pd::ModelSpec s;
+  s.surface_correction = pd::SurfaceCorrection::none; // the bare model
+  s.volume_correction = pd::VolumeCorrection::none;
   s.dimension.dim = 1;
   s.dimension.cross_section = area;
   s.lattice.spacing = lambda;
@@ -371,6 +373,8 @@ TEST(Simulation, StableStepDoesNotBlowUp) {
 /// to show up if the kernel or integrator were order- or thread-dependent.
 pd::ModelSpec plate() {
   pd::ModelSpec s;
+  s.surface_correction = pd::SurfaceCorrection::none; // the bare model
+  s.volume_correction = pd::VolumeCorrection::none;
   s.dimension.dim = 2;
   s.dimension.thickness = 0.01;
   s.lattice.spacing = lambda;
@@ -599,6 +603,7 @@ TEST(Simulation, MirrorClampHoldsTheBarAtTheFace) {
     if (mirror) {
       clamp.mirror[0] = true;
       clamp.mirror_at = {0, 0, 0};
+      spec.mirror_coupling = pd::MirrorCoupling::copy; // the one-sided coupling under test
     } else {
       clamp.fixed[0] = true;
     }

@@ -1,8 +1,8 @@
-// The sharp prediction of what `pd stability` measures (libpd/time/stability.hpp): a bounded run of N
-// steps is unstable once its energy grows by more than `growth`, and each mode's energy grows by
+// The sharp prediction of what `pd stability` measures (libpd/time/stability.hpp): a bounded run of
+// N steps is unstable once its energy grows by more than `growth`, and each mode's energy grows by
 // |a(ωΔt)|^{2N}. Checked here against closed forms derived independently of the library code.
-#include "libpd/time/integrator.hpp"
 #include "libpd/discretisation/model.hpp"
+#include "libpd/time/integrator.hpp"
 #include "libpd/time/stability.hpp"
 
 #include <cmath>
@@ -84,6 +84,8 @@ TEST(BoundedRunLimit, TheMostExcitedGrowingModeDecides) {
 
 pd::ModelSpec chain(int n) {
   pd::ModelSpec s;
+  s.surface_correction = pd::SurfaceCorrection::none; // the bare model
+  s.volume_correction = pd::VolumeCorrection::none;
   s.dimension.dim = 1;
   s.dimension.cross_section = 1e-4;
   s.lattice.spacing = 0.01;

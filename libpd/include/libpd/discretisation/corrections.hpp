@@ -54,13 +54,14 @@ struct EnumName<VolumeCorrection> {
 };
 
 /// What the corrections read of a model: its dimension, lattice, horizon rule and the two
-/// corrections (ModelSpec::corrections()).
+/// corrections (ModelSpec::corrections()). The horizon rule and the corrections have no defaults
+/// here: ModelSpec holds the library's, and whoever builds a CorrectionSpec names all three.
 struct CorrectionSpec {
   ModelDimension dimension;
   LatticeSpec lattice;
-  HorizonRule horizon_rule = HorizonRule::inclusive;
-  SurfaceCorrection surface_correction = SurfaceCorrection::none;
-  VolumeCorrection volume_correction = VolumeCorrection::none;
+  HorizonRule horizon_rule;
+  SurfaceCorrection surface_correction;
+  VolumeCorrection volume_correction;
 
   /// Whether any correction applies, i.e. whether bonds carry factors other than 1.
   bool corrects() const {

@@ -115,13 +115,16 @@ struct ModelSpec {
   std::vector<Crack> cracks; ///< pre-cracks: no bond crosses them
   EffectSet effects;
   FibreKernel fibre_kernel; ///< read only under effects.bond_model = virtual_fibres
-  SurfaceCorrection surface_correction = SurfaceCorrection::none;
-  VolumeCorrection volume_correction = VolumeCorrection::none;
-  /// A spec built in C++ is the bare model (no corrections, `copy` coupling); scene files take the
-  /// library's defaults instead (ghost + gradient + quadratic, io/scene/model_options.cpp). That
-  /// these differ is a known wart (issue 14 note): moving the C++ defaults touches every test
-  /// that builds a spec by hand.
-  MirrorCoupling mirror_coupling = MirrorCoupling::copy;
+  /// The library's defaults, which a scene file that names none of the keys under `model` also
+  /// takes (io/scene/model_options.cpp reads them from here): the treatment that is right in
+  /// tension and in bending for any box or union of boxes. Ghost layers outside free surfaces and
+  /// clamps extrapolated by the quadratics that vanish on their faces give every body particle
+  /// the bulk energy of any quadratic field (ghost_layers.hpp); the `gradient` bond weights make
+  /// that bulk energy the continuum's, cell by cell, for uniform strain and for bending
+  /// (corrections.hpp). The bare model is `none` + `none` (+ `copy`), said explicitly.
+  SurfaceCorrection surface_correction = SurfaceCorrection::ghost;
+  VolumeCorrection volume_correction = VolumeCorrection::gradient;
+  MirrorCoupling mirror_coupling = MirrorCoupling::quadratic;
 
   /// What the bond corrections read of the model (corrections.hpp). The fibre model reads
   /// `gradient` as the moment weights (fibre_arms.hpp), so its ghost layers reach the whole

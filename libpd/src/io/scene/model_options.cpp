@@ -9,22 +9,6 @@ namespace pd::scene {
 
 namespace {
 
-/// The model options as scene files default them: the treatment that is right in tension and in
-/// bending for any box or union of boxes (issue 14). Ghost layers outside free surfaces and
-/// clamps extrapolated by the quadratics that vanish on their faces give every body particle the
-/// bulk energy of any quadratic field (ghost_layers.hpp); the `gradient` bond weights make that
-/// bulk energy the continuum's, cell by cell, for uniform strain and for bending
-/// (corrections.hpp). ModelSpec's own default stays the bare model (none + none, copy) for code
-/// that assembles models directly.
-struct SceneModelOptions {
-  StretchKind stretch = EffectSet{}.stretch;
-  SurfaceCorrection surface_correction = SurfaceCorrection::ghost;
-  VolumeCorrection volume_correction = VolumeCorrection::gradient;
-  MirrorCoupling mirror_coupling = MirrorCoupling::quadratic;
-  BondModel bond_model = EffectSet{}.bond_model;
-  FibreKernel fibre_kernel;
-};
-
 constexpr Key model_keys[] = {
     {.name = "bond_model",
      .type = Type::choice,
@@ -32,41 +16,41 @@ constexpr Key model_keys[] = {
             "virtual-fibres (Olsson et al. 2021: arm tensions with a bulk/shear split, the "
             "material's E and ν)",
      .choices = enum_words<BondModel>,
-     .bind = field_with_default<&SceneModelOptions::bond_model>()},
+     .bind = field_with_default<&ModelSpec::effects, &EffectSet::bond_model>()},
     {.name = "fibre_kernel_exponent",
      .type = Type::integer,
      .doc = "virtual fibres: exponent k of the kernel (1 − u²/α²)^k, eq. 112",
      .range = at_least_one,
-     .bind = field_with_default<&SceneModelOptions::fibre_kernel, &FibreKernel::exponent>()},
+     .bind = field_with_default<&ModelSpec::fibre_kernel, &FibreKernel::exponent>()},
     {.name = "fibre_kernel_alpha",
      .type = Type::number,
      .doc = "virtual fibres: α, a particle's horizon over its size h (eq. 112); on a lattice "
             "h = δ/α, so the arms are the lattice's bonds and α changes nothing",
      .range = positive,
-     .bind = field_with_default<&SceneModelOptions::fibre_kernel, &FibreKernel::alpha>()},
+     .bind = field_with_default<&ModelSpec::fibre_kernel, &FibreKernel::alpha>()},
     {.name = "fibre_size_neighbours",
      .type = Type::integer,
      .doc = "virtual fibres, particle files without h: a particle's size is half its mean "
             "distance to this many nearest particles (eq. 115)",
      .range = at_least_one,
-     .bind = field_with_default<&SceneModelOptions::fibre_kernel, &FibreKernel::size_neighbours>()},
+     .bind = field_with_default<&ModelSpec::fibre_kernel, &FibreKernel::size_neighbours>()},
     {.name = "stretch",
      .type = Type::choice,
      .doc = "stretch measure (exact eq. 6, modified eq. 17, fast: no square root)",
      .choices = enum_words<StretchKind>,
-     .bind = field_with_default<&SceneModelOptions::stretch>()},
+     .bind = field_with_default<&ModelSpec::effects, &EffectSet::stretch>()},
     {.name = "surface_correction",
      .type = Type::choice,
      .doc = "bond stiffness correction near free surfaces",
      .choices = enum_words<SurfaceCorrection>,
-     .bind = field_with_default<&SceneModelOptions::surface_correction>()},
+     .bind = field_with_default<&ModelSpec::surface_correction>()},
     {.name = "volume_correction",
      .type = Type::choice,
      .doc = "bond quadrature weights: partial volume of cut cells (linear, exact), "
             "moment-matched lattice weights (moment), or weights that also match a cell's "
             "bending energy (gradient: stiffness on the bonds up to 2 spacings)",
      .choices = enum_words<VolumeCorrection>,
-     .bind = field_with_default<&SceneModelOptions::volume_correction>()},
+     .bind = field_with_default<&ModelSpec::volume_correction>()},
     {.name = "mirror_coupling",
      .type = Type::choice,
      .doc = "mirror supports: quadratic (support particles extrapolated from the body by the "
@@ -74,7 +58,7 @@ constexpr Key model_keys[] = {
             "clamp allows), consistent (odd images, forces sent back: symmetric) or copy (odd "
             "images, one-sided, not energy-conserving)",
      .choices = enum_words<MirrorCoupling>,
-     .bind = field_with_default<&SceneModelOptions::mirror_coupling>()},
+     .bind = field_with_default<&ModelSpec::mirror_coupling>()},
 };
 
 } // namespace
@@ -92,14 +76,9 @@ void read_model_options(Reader& r, ModelSpec& model, Marks& marks) {
 
   const Fields f = r.section(marks.top, "model");
   marks.model = f;
-  SceneModelOptions options;
-  r.read_bound(f, options);
-  model.effects.stretch = options.stretch;
-  model.surface_correction = options.surface_correction;
-  model.volume_correction = options.volume_correction;
-  model.mirror_coupling = options.mirror_coupling;
-  model.effects.bond_model = options.bond_model;
-  model.fibre_kernel = options.fibre_kernel;
+  // Keys left out keep the values `model` holds: ModelSpec's defaults (model.hpp), so that an
+  // empty scene builds the model a default ModelSpec does.
+  r.read_bound(f, model);
 }
 
 void check_bond_model(Reader& r, const Scene& scene, const Marks& marks) {
