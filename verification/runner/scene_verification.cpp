@@ -70,20 +70,6 @@ YAML::Node run_fe(const std::filesystem::path& scene, const std::filesystem::pat
   }
 }
 
-/// The materials as the PD run resolved them (E, ν, density): recorded beside the FE's own
-/// record so that a reader sees both solvers solved one problem.
-Json materials_json(const Scene& scene) {
-  Json rows = Json::array();
-  for (const Material& m : scene.model.materials) {
-    Json row;
-    row["name"] = m.name;
-    row["youngs_modulus"] = m.youngs_modulus * m.stiffness_factor;
-    row["poisson_ratio"] = m.poisson_ratio;
-    rows.push_back(row);
-  }
-  return rows;
-}
-
 /// Bond-based PD represents one ν per setting (material.hpp); a scene that gives another one
 /// would be verified against an FE solution of a different material, so it is refused.
 void require_representable_poisson_ratio(const Scene& scene) {
@@ -169,7 +155,10 @@ Json verify_scene(const std::filesystem::path& scene_path, const Context& ctx,
       static_cast<double>(pd.bonds) * static_cast<double>(pd.result.force_evaluations);
   out["fe_seconds"] = fe_wall;
   out["fe_model"] = fe["model"] ? fe["model"].as<std::string>() : std::string();
-  out["materials"] = materials_json(scene);
+  // The materials PD's summary.json records, beside fe.json's: both solvers solved one problem.
+  if (const Json* materials = pd.summary.find("materials")) {
+    out["materials"] = *materials;
+  }
   const std::map<std::string, double> scales = quantity_scales(scene, fe);
   bool complete = true;
   bool within = true;
