@@ -1,6 +1,7 @@
 #include "libpd/discretisation/model.hpp"
 
 #include "libpd/discretisation/bond_cuts.hpp"
+#include "libpd/discretisation/lattice_toughness.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -76,14 +77,20 @@ struct MaterialConstants {
 std::vector<MaterialConstants> material_constants(const ModelSpec& spec) {
   std::vector<MaterialConstants> out;
   const double delta = spec.lattice.horizon();
-  // s0 from G0 assumes uniform bond weights; `gradient` weights store `ratio` times the energy in
-  // the bonds crossing a plane, so s0/√ratio keeps the energy to break them all what the uniform
-  // lattice releases (G0 up to the lattice quadrature of eq. 11's integral). Explicit s0 stays.
+  // s0 from G0 (eq. 11 and its 2D forms) makes the energy stored at s0 across a plane G0. In 2D
+  // it is divided by the lattice's toughness ratio (lattice_toughness.hpp), so that a crack runs
+  // at K_Ic = √(E' G0) whatever the weights and m. Elsewhere: `gradient` weights store `ratio`
+  // times the energy in the bonds crossing a plane, so s0/√ratio keeps that energy what the
+  // uniform lattice releases (the 3D toughness ratio is not derived yet). Explicit s0 stays.
   double stretch_scale = 1.0;
   for (const Material& m : spec.materials) {
-    if (!m.critical_stretch && m.fracture_energy &&
-        spec.volume_correction == VolumeCorrection::gradient) {
-      stretch_scale = 1.0 / std::sqrt(fracture_energy_weight_ratio(spec.corrections()));
+    if (!m.critical_stretch && m.fracture_energy && spec.effects.damage &&
+        spec.effects.bond_model == BondModel::micro_elastic) {
+      if (const auto toughness = lattice_toughness_ratio(spec)) {
+        stretch_scale = 1.0 / *toughness;
+      } else if (spec.volume_correction == VolumeCorrection::gradient) {
+        stretch_scale = 1.0 / std::sqrt(fracture_energy_weight_ratio(spec.corrections()));
+      }
       break;
     }
   }
