@@ -1,7 +1,6 @@
 #include "libpd/discretisation/model.hpp"
 
 #include "libpd/discretisation/bond_cuts.hpp"
-#include "libpd/discretisation/lattice_toughness.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -78,7 +77,7 @@ std::vector<MaterialConstants> material_constants(const ModelSpec& spec) {
   std::vector<MaterialConstants> out;
   const double delta = spec.lattice.horizon();
   // s0 from G0 (eq. 11 and its 2D forms) makes the energy stored at s0 across a plane G0. In 2D
-  // it is divided by the lattice's toughness ratio (lattice_toughness.hpp), so that a crack runs
+  // it is divided by the lattice's toughness ratio (lattice_toughness.cpp), so that a crack runs
   // at K_Ic = √(E' G0) whatever the weights and m. Elsewhere: `gradient` weights store `ratio`
   // times the energy in the bonds crossing a plane, so s0/√ratio keeps that energy what the
   // uniform lattice releases (the 3D toughness ratio is not derived yet). Explicit s0 stays.

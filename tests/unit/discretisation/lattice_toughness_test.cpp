@@ -1,5 +1,5 @@
-// The toughness ratio of the lattice (lattice_toughness.hpp) and how s0 takes it.
-#include "libpd/discretisation/lattice_toughness.hpp"
+// The toughness ratio of the lattice (model.hpp, lattice_toughness.cpp) and how s0 takes it.
+#include "libpd/discretisation/model.hpp"
 #include "libpd/io/scene.hpp"
 
 #include <cmath>
