@@ -358,6 +358,41 @@ probes:
                        16, 42, "drops_below"));
 }
 
+/// stop_when.drops_below takes a drop for a failure only when bonds broke since the peak: a grip
+/// moved in one step makes the undamped plate's reaction swing (633 kN in the first step, 41 kN
+/// two steps later, no bond broken), which is not a failure; the same grip ramped on a plate whose
+/// bonds break near it is.
+TEST(SceneGeometry, StopWhenDropNeedsBrokenBonds) {
+  const auto status = [](const char* fracture_energy, const char* ramp) {
+    const std::string text = plate(R"(supports:
+  - name: left
+    box: [[0, 0], [0.01, 0.1]]
+    fixed: [x, y]
+  - name: right
+    box: [[0.19, 0], [0.2, 0.1]]
+    displacement: {x: 1e-5}
+    fixed: [y]
+effects: [damage]
+solver:
+  integrator: verlet
+  end_time: 2e-4
+  ramp_time: )" + std::string(ramp) +
+                                   R"(
+  stop_when: {probe: force, drops_below: 0.5}
+probes:
+  - name: force
+    support: right
+    component: x
+)");
+    std::string scene = text;
+    scene.replace(scene.find("density: 7800"), 13,
+                  "density: 7800\n    fracture_energy: " + std::string(fracture_energy));
+    return pd::run_scene(pd::parse_scene(scene, "s.yaml"), pd::RunOptions{}).result.status;
+  };
+  EXPECT_EQ(status("1e9", "0"), pd::RunStatus::end_time);
+  EXPECT_EQ(status("20", "1e-4"), pd::RunStatus::failed);
+}
+
 /// A half plate with a symmetry plane gives the full plate's answer: a plate stretched by grips
 /// at both ends, against its right half with the plane x = 0 (on cell faces, as the lattice puts
 /// a box's faces) and one grip.

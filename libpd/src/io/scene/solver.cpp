@@ -127,8 +127,9 @@ constexpr Key stop_when_keys[] = {
      .need = Need::required},
     {.name = "drops_below",
      .type = Type::number,
-     .doc = "stop once |value| falls below this fraction of its peak |value| so far (a reaction "
-            "after the specimen broke)",
+     .doc = "stop once |value| falls below this fraction of its peak |value| so far and bonds "
+            "have broken since that peak (a reaction after the specimen broke; a swing of the "
+            "probe with no bond broken is not a failure, and without damage nothing can fail)",
      .range = {0, 1, true, true},
      .example = "0.5",
      .need = Need::one_of,
