@@ -107,6 +107,9 @@ Json run_summary(const Scene& scene, const Simulation& sim, const RunOutcome& ou
   for (const auto& [name, count] : out.point_load_particles) {
     j["point_loads"][name]["particles"] = count;
   }
+  if (out.quasi_static.is_object()) {
+    j["quasi_static"] = out.quasi_static;
+  }
   if (scene.stop_when.enabled()) {
     Json& sj = j["stop_when"];
     sj["probe"] = scene.stop_when.probe;
