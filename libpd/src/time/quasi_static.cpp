@@ -289,9 +289,15 @@ FractureOutcome run_fracture(Simulation& sim, Model& model, const FractureSettin
     if (!ok) {
       out.end = FractureOutcome::End::no_equilibrium;
       out.message = fmt::format(
-          "no equilibrium at load factor {:.6g} after {} bonds broke (the specimen failed; "
-          "largest load factor in equilibrium {:.6g})",
+          "no equilibrium at load factor {:.6g} after {} bonds broke: the specimen failed "
+          "(largest load factor in equilibrium {:.6g}; the final state is the broken specimen "
+          "unloaded)",
           fraction, out.bonds_broken, out.peak_load_factor);
+      // The failed solve's state is meaningless (a loose piece under load has no finite
+      // displacement); the broken specimen without load has one, and the run's files show it.
+      set_level(0);
+      sim.run();
+      ++out.solves;
     }
     return ok;
   };

@@ -54,8 +54,25 @@ struct BarRun {
   std::size_t broken_bonds = 0;
 };
 
-BarRun pull_bar(std::size_t levels) {
-  const pd::Scene scene = pd::parse_scene(bar, "bar");
+/// The same bar under load control: the right layer pulled by 50 N instead of a displacement.
+std::string loaded_bar() {
+  std::string text = bar;
+  const std::string moved = R"(  - name: right
+    box: [[0.36], [0.4]]
+    displacement: {x: 1e-4}
+)";
+  text.replace(text.find(moved), moved.size(), "");
+  text.replace(text.find("effects:"), 0, R"(loads:
+  - name: pull
+    box: [[0.36], [0.4]]
+    type: total
+    value: [50]
+)");
+  return text;
+}
+
+BarRun pull_bar(std::size_t levels, const std::string& text = bar) {
+  const pd::Scene scene = pd::parse_scene(text, "bar");
   pd::Model model = pd::build_model(scene.model);
   EXPECT_FALSE(model.field.bond_critical_stretch.empty()) << "the test needs per-bond s0";
   // The weak bond: between the two particles either side of x = 0.2, at half its s0; the other
@@ -222,6 +239,23 @@ TEST(QuasiStaticFracture, FailureLoadDoesNotDependOnTheLevels) {
   EXPECT_GT(p5, 0);
   EXPECT_NEAR(p2 / p5, 1.0, 1e-4);
   EXPECT_NEAR(p17 / p5, 1.0, 1e-4);
+}
+
+/// Under load control the bar cannot carry the load once it has separated: the run ends with no
+/// equilibrium, its failure load the largest load factor of a critical state, and it has
+/// dissipated its crossing bonds' energy as under displacement control.
+TEST(QuasiStaticFracture, LoadControlledBarFailsWithoutEquilibrium) {
+  const BarRun r = pull_bar(4, loaded_bar());
+  EXPECT_EQ(r.outcome.end, pd::quasi_static::FractureOutcome::End::no_equilibrium);
+  double largest = 0;
+  for (const auto& p : r.points) {
+    largest = std::max(largest, p.load_factor);
+  }
+  EXPECT_EQ(r.outcome.peak_load_factor, largest);
+  EXPECT_LT(largest, 1.0); // 50 N is beyond the bar's strength
+  EXPECT_EQ(r.broken_bonds, r.crossing_bonds);
+  EXPECT_NEAR(r.outcome.dissipated_energy / r.crossing_energy, 1.0, 1e-5);
+  std::printf("load control: failure at %.6g of 50 N, %s\n", largest, r.outcome.message.c_str());
 }
 
 } // namespace
