@@ -419,8 +419,10 @@ private:
       curve += "," + p.name;
     }
     curve += "\n";
+    double last_load_factor = 0;
     const quasi_static::FractureOutcome f = quasi_static::run_fracture(
         *sim_, model_, settings, [&](const Simulation& s, const quasi_static::FracturePoint& p) {
+          last_load_factor = p.load_factor;
           curve += fmt::format("{},{:.17g},{},{},{},{:.17g}", p.level, p.load_factor,
                                p.critical ? 1 : 0, p.bonds_broken, p.breaking, p.dissipated_energy);
           for (const ResolvedProbe& probe : probes_) {
@@ -441,7 +443,7 @@ private:
     RunResult& r = out_.result;
     r.steps = f.solves;
     r.internal_steps = f.solves;
-    r.time = sim_->state().time;
+    r.time = last_load_factor; // the time axis of a run by levels
     r.dt = sim_->dt();
     r.force_evaluations = sim_->integrator().force_evaluations();
     r.strain_energy = sim_->strain_energy();
