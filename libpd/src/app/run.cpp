@@ -515,9 +515,11 @@ private:
     damage_before_sample_ = damage;
     if (stop.drops_below > 0 && stop_peak_ > 0 && value < stop.drops_below * stop_peak_ &&
         comm().max(damage - damage_before_peak_) > 0) {
-      failure_ = fmt::format("probe '{}' fell to {:.6g}, below {} of its peak {:.6g} (at t = "
-                             "{:.6g} s): the failure value is the peak",
-                             stop.probe, value, stop.drops_below, stop_peak_, stop_peak_time_);
+      failure_ = fmt::format("probe '{}' fell to {:.6g}, below {} of its peak {:.6g} (at {} "
+                             "{:.6g}{}): the failure value is the peak",
+                             stop.probe, value, stop.drops_below, stop_peak_,
+                             quasi_static_fracture() ? "load factor" : "t =", stop_peak_time_,
+                             quasi_static_fracture() ? "" : " s");
     } else if (stop.exceeds > 0 && value > stop.exceeds) {
       failure_ =
           fmt::format("probe '{}' reached {:.6g}, above {:.6g}", stop.probe, value, stop.exceeds);
