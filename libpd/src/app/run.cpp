@@ -365,12 +365,12 @@ private:
     if (scene_.output.history_every > 0 && !out_.restarted_from_step) {
       record(*sim_);
     }
+    damage_before_sample_ = local_damage(); // of the initial or restored state
     if (quasi_static_fracture()) {
       advance_by_levels(interrupt);
       return;
     }
     ProgressLine progress(options_.progress && comm().root(), scene_.solver.end_time.value_or(0.0));
-    damage_before_sample_ = local_damage(); // of the initial or restored state
     out_.result = sim_->run([&](const Simulation& s) {
       after_step(s);
       progress.update(s);

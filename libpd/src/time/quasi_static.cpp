@@ -342,6 +342,10 @@ FractureOutcome run_fracture(Simulation& sim, Model& model, const FractureSettin
           breaking.push_back(k);
         }
       }
+      if (breaking.empty()) { // rc ≤ 0: the level's stretch was not linear in it
+        throw std::logic_error(fmt::format(
+            "quasi-static fracture: no bond at s0 at the critical load factor {:.6g}", critical));
+      }
       point.breaking = breaking.size();
       if (!observer(sim, point)) {
         stop("stopped by the observer");

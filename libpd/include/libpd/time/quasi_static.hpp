@@ -28,6 +28,11 @@
 //
 // Method::static_ instead solves each level with the static solver, which breaks bonds in events
 // at equilibrium (time/static_solver.cpp); the observer sees the same Simulation interface.
+//
+// run_fracture is the path of a scene (`integrator: static` with damage): sequentially linear,
+// one bond (or a tie) per break at the load where it reaches s0, so that its failure load depends
+// on neither a rate nor the levels. The built-in cases keep run() (rc-beam breaks 5,400 bonds in
+// its first increment: two solves per bond would cost hours).
 #pragma once
 
 #include "libpd/discretisation/model.hpp"
