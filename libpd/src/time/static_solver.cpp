@@ -36,11 +36,13 @@
 // re-solve; that needs a factorisation per bond (the beam breaks 5,400 in its first increment).
 // Breaking all at once is the cheaper approximation, and it can overshoot: a bond broken in the
 // same event as the one that overloaded it might have unloaded had they broken in turn
-// (docs/theory/quasi-brittle.md measures what this does on rc-beam). During Newton the kernel
-// must neither break bonds nor drop the force of a bond beyond s0 (an iterate is not an
-// equilibrium): s0 is lifted to no_limit while Newton runs (BreakingSuspended), so the residual
-// is the elastic one of the unbroken bonds. Restoring only the broken flags after each
-// evaluation is not enough: a bond beyond s0 still carries no force in that evaluation, and
+// (docs/theory/quasi-brittle.md measures what this does on rc-beam). A scene's quasi-static
+// fracture (quasi_static::run_fracture) breaks them in turn instead: it holds the kernel's s0
+// itself, so each step here is one solve, and it chooses the bond and the load of each break.
+// During Newton the kernel must neither break bonds nor drop the force of a bond beyond s0 (an
+// iterate is not an equilibrium): s0 is lifted to no_limit while Newton runs (BreakingSuspended),
+// so the residual is the elastic one of the unbroken bonds. Restoring only the broken flags after
+// each evaluation is not enough: a bond beyond s0 still carries no force in that evaluation, and
 // Newton converged to states whose overstretched bonds carried nothing — measured on rc-beam,
 // one event then broke all 134,557 concrete bonds at 0.25 mm, where ADR breaks 5,300.
 #include "libpd/time/static_solver.hpp"
