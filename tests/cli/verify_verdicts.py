@@ -14,6 +14,41 @@ def load(path):
 STATIC = "  force_tolerance: 1e-10\n"
 
 
+BAR = """title: balanced bar
+dimension: 2
+plane: stress
+thickness: 0.01
+lattice:
+  spacing: 0.01
+materials:
+  steel:
+    youngs_modulus: 200e9
+    density: 7800
+bodies:
+  - name: bar
+    material: steel
+    box: [[0, 0], [0.4, 0.1]]
+loads:
+  - name: right
+    box: [[0.39, 0], [0.4, 0.1]]
+    type: total
+    value: [1000, 0]
+  - name: left
+    box: [[0, 0], [0.01, 0.1]]
+    type: total
+    value: LEFT
+solver:
+  integrator: static
+probes:
+  - name: right_end
+    box: [[0.39, 0], [0.4, 0.1]]
+    component: x
+  - name: top_lateral
+    box: [[0.19, 0.09], [0.21, 0.1]]
+    component: y
+"""
+
+
 class VerifyVerdicts(pdcli.TestCase):
     def verify(self, scene, *extra):
         out = self.path("verify")
@@ -61,6 +96,30 @@ class VerifyVerdicts(pdcli.TestCase):
         r, _ = self.verify(scene)
         self.assertEqual(r.returncode, 1, r.stdout + r.stderr)
         self.assertIn("different problems", r.stderr)
+
+    def bar(self, left_value="[-1000, 0]"):
+        """A plane-stress bar held by nothing, pulled by 1 kN at each end (poisson-control's shape)."""
+        scene = self.path("bar.yaml")
+        with open(scene, "w") as f:
+            f.write(BAR.replace("LEFT", left_value))
+        return scene
+
+    def test_a_bar_held_only_by_balanced_loads_verifies(self):
+        r, d = self.verify(self.bar(), "--gate", "0.05")
+        self.assertEqual(r.returncode, 0, r.stdout + r.stderr)
+        self.assertEqual(d["verdict"], "passed", d)
+        probes = {p["name"]: p for p in d["probes"]}
+        # Zero mean rigid motion on both sides: the end moves by F/(EA) times its distance from
+        # the centroid, 5e-6 * 0.195 m, and the top row contracts by ν ε 0.045 m (ν = 1/3).
+        self.assertAlmostEqual(probes["right_end"]["fe"] / (5e-6 * 0.195), 1, delta=0.01)
+        self.assertAlmostEqual(probes["top_lateral"]["fe"] / (-5e-6 * 0.045 / 3), 1, delta=0.01)
+        self.assertLess(abs(probes["right_end"]["relative_difference"]), 0.02)
+
+    def test_a_free_body_under_unbalanced_loads_is_refused_with_what_to_add(self):
+        r, _ = self.verify(self.bar("[-1000, 10]"))
+        self.assertEqual(r.returncode, 1, r.stdout + r.stderr)
+        self.assertIn("not balanced", r.stderr)
+        self.assertIn("add a support", r.stderr)
 
     def test_nonsense_gates_and_levels_are_refused(self):
         scene = self.static_scene()
