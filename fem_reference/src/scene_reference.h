@@ -96,5 +96,6 @@ private:
   // Per load: force density [N/m³] on its cells on this level's mesh.
   std::vector<Tensor<1, dim>> load_density;
   std::vector<SceneLevel> levels;
+  std::string stopped_for_memory; // why refinement stopped before the levels asked for
 };
 } // namespace pdfem
