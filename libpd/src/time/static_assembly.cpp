@@ -92,7 +92,9 @@ Vec3 cross(const Vec3& p, const Vec3& q) {
 } // namespace
 
 std::vector<std::size_t> rigid_motion_pins(const Model& m) {
-  if (!m.constraints.empty() || m.body_particle_count() < 3) {
+  // A support may hold the body without constraints (a quadratic clamp extrapolates its
+  // particles): the scene's supports decide.
+  if (!m.spec.supports.empty() || !m.constraints.empty() || m.body_particle_count() < 3) {
     return {};
   }
   const int dim = m.spec.dimension.dim;

@@ -39,7 +39,7 @@ inline DofMap map_dofs(const Model& m) {
   return map_dofs(m, m.extrapolated);
 }
 
-/// A body no support holds (no constraint, no extrapolated particle) is free to move rigidly: K
+/// A body no support holds (the scene has none) is free to move rigidly: K
 /// is singular. These global dofs, held at zero, remove exactly the rigid motions and nothing
 /// else: a particle A (every component), the particle B farthest from it (the components across
 /// AB) and, in 3D, the particle C farthest from the line AB (the component along the normal of
