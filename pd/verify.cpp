@@ -201,14 +201,19 @@ private:
       std::string reasons;
       if (const Json* list = r.find("reasons")) {
         reasons = list->dump(0);
+        while (!reasons.empty() && reasons.back() == '\n') {
+          reasons.pop_back();
+        }
       }
       const Json* probes = r.find("probes");
       if (probes != nullptr && probes->items() != nullptr) {
         // Probes: each judged on its own tolerance.
         // The scene's own conditions: failed where a reason (other than a probe beyond the
         // gate, which its probe's testcase reports) says PD and FE are not comparable.
-        const bool comparable = reasons == "[]" || (r.find("reasons")->items()->size() == 1 &&
-                                                    reasons.find("the gate") != std::string::npos);
+        const Json::Array* why =
+            r.find("reasons") != nullptr ? r.find("reasons")->items() : nullptr;
+        const bool comparable = why == nullptr || why->empty() ||
+                                (why->size() == 1 && reasons.find("the gate") != std::string::npos);
         add("verdict",
             verdict == "measured" || verdict == "interrupted" ? verdict
             : comparable                                      ? "passed"

@@ -185,6 +185,8 @@ class VerifyVerdicts(pdcli.TestCase):
         root = junit_schema.check(junit)
         self.assertEqual(int(root.get("failures")), 0)
         self.assertEqual(int(root.get("skipped")), len(d["probes"]) + 1)
+        verdict = [c for c in root.iter("testcase") if c.get("name") == "verdict"][0]
+        self.assertEqual(verdict.find("skipped").get("message"), "measured, not judged: no --gate")
         # A scene that cannot run is an error, recorded.
         r, _ = self.verify(self.bar("[-1000, 10]"), "--junit", junit)
         self.assertEqual(r.returncode, 1, r.stdout + r.stderr)
