@@ -23,6 +23,7 @@
 #include "scene_reference.h"
 
 #include "elastic_common.h"
+#include "libpd/core/memory.hpp"
 #include "report.h"
 #include "scene_mesh.h"
 
@@ -39,7 +40,9 @@
 #include <iomanip>
 #include <iostream>
 #include <map>
+#include <optional>
 #include <set>
+#include <sstream>
 
 namespace pdfem {
 namespace {
@@ -87,6 +90,29 @@ namespace {
 // Unknowns of a Q2 vector field on n cells, roughly: 2^dim nodes per cell, dim components.
 double estimated_dofs(const int dim, const double cells) {
   return dim * std::pow(2., dim) * cells;
+}
+
+// Why: the memory a level needs, estimated from its cells before anything of it is allocated,
+// so that refining stops with a message instead of std::bad_alloc minutes later. Per unknown,
+// Q2 couples about 64 nodes in 3D and 16 in 2D (a cell's 8 or 4 nodes weighted by how many cells
+// share them): 3 · 64 entries of 12 bytes (value and column) in 3D, 2 · 16 in 2D, held about five
+// times over (the sparsity pattern, the matrix, the triangle the factorisation reads, its input
+// copy and the solver's work). The 3D Cholesky factor grows like n^(4/3) from the notched beam's
+// 546 MB at 93,075 unknowns (elastic_common.h), the 2D one like n log n (taken at 30 n log2 n
+// entries); beyond direct_solver_max_dofs the AMG hierarchy is about twice the matrix. The mesh's
+// boundary nodes add a quarter to estimated_dofs (the 3D cantilever's levels: 18,603 and
+// 133,875 unknowns for 14,976 and 119,808). Measured there at 133,875 unknowns: a 935 MB factor
+// and 2.45 GB peak, estimated 2.8 GB.
+double estimated_level_bytes(const int dim, const double cells) {
+  const double dofs = 1.25 * estimated_dofs(dim, cells);
+  const double row = dim == 3 ? 3. * 64. * 12. : 2. * 16. * 12.;
+  double bytes = 5. * row * dofs;
+  if (dofs <= static_cast<double>(direct_solver_max_dofs(dim)))
+    bytes += dim == 3 ? 546e6 * std::pow(dofs / 93075., 4. / 3.)
+                      : 8. * 30. * dofs * std::log2(std::max(dofs, 2.));
+  else
+    bytes += 2. * row * dofs;
+  return bytes;
 }
 } // namespace
 
@@ -168,6 +194,7 @@ void SceneReference<dim>::setup_system() {
   const auto n = dof_handler->n_dofs();
   std::vector<Point<dim>> points(n);
   DoFTools::map_dofs_to_support_points(*mapping, *dof_handler, points);
+  dof_points = points;
   dof_component.assign(n, 0);
   std::vector<types::global_dof_index> dofs(fe.n_dofs_per_cell());
   for (const auto& cell : dof_handler->active_cell_iterators()) {
@@ -209,6 +236,10 @@ void SceneReference<dim>::setup_system() {
       throw std::runtime_error("support '" + sup.name + "' holds no node of the FE mesh");
   }
 
+  free_body = problem.supports.empty();
+  if (free_body)
+    pin_rigid_motion(value);
+
   constraints.clear();
   for (const auto& [dof, g] : value) {
     constraints.add_line(dof);
@@ -222,6 +253,157 @@ void SceneReference<dim>::setup_system() {
   system_matrix.reinit(all_dofs, all_dofs, dsp, MPI_COMM_WORLD);
   system_rhs.reinit(all_dofs, MPI_COMM_WORLD);
   solution.reinit(n);
+}
+
+// Why: a body no support holds is free to move rigidly, and K is singular. As in PD's static
+// solve (libpd time/static_assembly.hpp, rigid_motion_pins), a node A (every component), the
+// node B farthest from it (the components across AB) and in 3D the node C farthest from the line
+// AB (the component along the normal of ABC) are held at zero: that removes the rigid motions
+// and nothing else, so under balanced loads they carry no reaction.
+template <int dim>
+void SceneReference<dim>::pin_rigid_motion(std::map<types::global_dof_index, double>& value) const {
+  const auto n = dof_points.size();
+  const auto dominant = [](const Tensor<1, 3>& v) {
+    unsigned int k = 0;
+    for (unsigned int a = 1; a < dim; ++a)
+      k = std::abs(v[a]) > std::abs(v[k]) ? a : k;
+    return k;
+  };
+  const auto as3 = [](const Point<dim>& p) {
+    Tensor<1, 3> t;
+    for (unsigned int a = 0; a < dim; ++a)
+      t[a] = p[a];
+    return t;
+  };
+  types::global_dof_index a = 0;
+  for (types::global_dof_index i = 1; i < n; ++i) {
+    const auto& p = dof_points[i];
+    const auto& q = dof_points[a];
+    if (std::lexicographical_compare(p.begin_raw(), p.end_raw(), q.begin_raw(), q.end_raw()))
+      a = i;
+  }
+  const auto farthest = [&](const auto& distance) {
+    types::global_dof_index best = 0;
+    for (types::global_dof_index i = 1; i < n; ++i)
+      best = distance(as3(dof_points[i])) > distance(as3(dof_points[best])) ? i : best;
+    return best;
+  };
+  const Tensor<1, 3> xa = as3(dof_points[a]);
+  const Tensor<1, 3> xb = as3(dof_points[farthest([&](const auto& p) { return (p - xa).norm(); })]);
+  const Tensor<1, 3> ab = xb - xa;
+  Tensor<1, 3> xc, normal;
+  if (dim == 3) {
+    xc = as3(
+        dof_points[farthest([&](const auto& p) { return cross_product_3d(ab, p - xa).norm(); })]);
+    normal = cross_product_3d(ab, xc - xa);
+  }
+  const double tol = problem.tolerance();
+  for (types::global_dof_index i = 0; i < n; ++i) {
+    const Tensor<1, 3> p = as3(dof_points[i]);
+    const unsigned int c = dof_component[i];
+    if ((p - xa).norm() <= tol || ((p - xb).norm() <= tol && c != dominant(ab)) ||
+        (dim == 3 && (p - xc).norm() <= tol && c == dominant(normal)))
+      value[i] = 0.;
+  }
+}
+
+// Why: a free body has an equilibrium only under loads of zero resultant and zero moment: both
+// are integrated over the loads' cells as the load vector integrates them (before the pinned
+// dofs' rows are cleared).
+template <int dim>
+void SceneReference<dim>::require_balanced_loads() const {
+  const QGauss<dim> quadrature(fe.degree + 1);
+  FEValues<dim> fv(*mapping, fe, quadrature, update_quadrature_points | update_JxW_values);
+  Tensor<1, 3> force, moment;
+  double scale = 0., size = 0.;
+  for (const auto& cell : dof_handler->active_cell_iterators()) {
+    fv.reinit(cell);
+    for (const unsigned int q : fv.quadrature_point_indices()) {
+      const pd::Vec3 x = to_vec3(fv.quadrature_point(q));
+      Tensor<1, 3> r;
+      for (unsigned int a = 0; a < dim; ++a)
+        r[a] = x[a] - 0.5 * (problem.bounding_box.lo[a] + problem.bounding_box.hi[a]);
+      for (std::size_t l = 0; l < problem.loads.size(); ++l)
+        if (problem.loads[l].cells.contains(x)) {
+          Tensor<1, 3> f;
+          for (unsigned int a = 0; a < dim; ++a)
+            f[a] = load_density[l][a] * fv.JxW(q);
+          force += f;
+          moment += cross_product_3d(r, f);
+          scale += f.norm();
+          size = std::max(size, r.norm());
+        }
+    }
+  }
+  if (force.norm() > 1e-9 * scale || moment.norm() > 1e-9 * scale * size) {
+    std::ostringstream what;
+    what << "no support holds the body and its loads are not balanced (resultant " << force
+         << ", moment " << moment
+         << "), so it has no equilibrium: add a support (e.g. a fixed box) or balance the loads";
+    throw std::runtime_error(what.str());
+  }
+}
+
+// Why: the free body's solution is defined up to a rigid motion; the one reported has none in
+// the mean (zero mean displacement and rotation about the centroid, the L2 projection off the
+// rigid motions), as PD's static solve reports it. Q2 holds the rigid motions exactly, so they
+// are subtracted node by node.
+template <int dim>
+void SceneReference<dim>::remove_rigid_motion() {
+  const QGauss<dim> quadrature(fe.degree + 1);
+  FEValues<dim> fv(*mapping, fe, quadrature,
+                   update_values | update_quadrature_points | update_JxW_values);
+  std::vector<Vector<double>> u(quadrature.size(), Vector<double>(dim));
+  double volume = 0.;
+  Tensor<1, 3> centre, mean;
+  std::vector<std::pair<Tensor<1, 3>, Tensor<1, 3>>> samples; // (x, u) per quadrature point
+  std::vector<double> weights;
+  for (const auto& cell : dof_handler->active_cell_iterators()) {
+    fv.reinit(cell);
+    fv.get_function_values(solution, u);
+    for (const unsigned int q : fv.quadrature_point_indices()) {
+      Tensor<1, 3> x, v;
+      for (unsigned int a = 0; a < dim; ++a) {
+        x[a] = fv.quadrature_point(q)[a];
+        v[a] = u[q][a];
+      }
+      volume += fv.JxW(q);
+      centre += fv.JxW(q) * x;
+      mean += fv.JxW(q) * v;
+      samples.emplace_back(x, v);
+      weights.push_back(fv.JxW(q));
+    }
+  }
+  centre /= volume;
+  mean /= volume;
+  FullMatrix<double> inertia(3, 3);
+  Vector<double> torque(3);
+  for (std::size_t k = 0; k < samples.size(); ++k) {
+    const Tensor<1, 3> r = samples[k].first - centre;
+    const Tensor<1, 3> t = cross_product_3d(r, samples[k].second - mean);
+    for (unsigned int a = 0; a < 3; ++a) {
+      torque(a) += weights[k] * t[a];
+      for (unsigned int b = 0; b < 3; ++b)
+        inertia(a, b) += weights[k] * ((a == b ? r * r : 0.) - r[a] * r[b]);
+    }
+  }
+  Tensor<1, 3> omega;
+  if (dim == 3) {
+    FullMatrix<double> inverse(3, 3);
+    inverse.invert(inertia);
+    Vector<double> w(3);
+    inverse.vmult(w, torque);
+    for (unsigned int a = 0; a < 3; ++a)
+      omega[a] = w(a);
+  } else
+    omega[2] = torque(2) / inertia(2, 2);
+  for (types::global_dof_index i = 0; i < dof_points.size(); ++i) {
+    Tensor<1, 3> r;
+    for (unsigned int a = 0; a < dim; ++a)
+      r[a] = dof_points[i][a] - centre[a];
+    const Tensor<1, 3> rigid = mean + cross_product_3d(omega, r);
+    solution[i] -= rigid[dof_component[i]];
+  }
 }
 
 // Why: PD conserves each load's resultant exactly, so the density F/V uses the volume V of the
@@ -306,8 +488,12 @@ void SceneReference<dim>::solve() {
   Point<dim> centre;
   for (unsigned int a = 0; a < dim; ++a)
     centre[a] = (problem.bounding_box.lo[a] + problem.bounding_box.hi[a]) / 2;
+  if (free_body)
+    require_balanced_loads();
   const CgStatistics stats = solve_elasticity(*dof_handler, system_matrix, system_rhs, constraints,
                                               centre, "AMG", 1e-10, 10000, solution);
+  if (free_body)
+    remove_rigid_motion();
   levels.back().solver = solver_summary(stats);
 }
 
@@ -420,6 +606,8 @@ void SceneReference<dim>::output_results(const double wall_time) const {
     }
     w.end_array();
     w.value("wall_time_s", wall_time);
+    if (!stopped_for_memory.empty())
+      w.value("refinement_stopped", stopped_for_memory);
     w.begin_array("levels");
     for (const SceneLevel& l : levels) {
       w.begin_object();
@@ -462,11 +650,27 @@ template <int dim>
 std::vector<SceneLevel> SceneReference<dim>::run() {
   const auto t_start = std::chrono::steady_clock::now();
   unsigned int n_levels = 0;
+  const std::optional<pd::MemoryBudget> memory = pd::available_memory();
   for (unsigned int level = 0; level == 0 || level < n_levels; ++level) {
     const auto t0 = std::chrono::steady_clock::now();
     make_grid(level);
     if (level == 0)
       n_levels = choose_levels();
+    const double need = estimated_level_bytes(dim, triangulation.n_active_cells());
+    if (memory && need > memory->bytes) {
+      std::ostringstream what;
+      what << "level " << level << " (" << triangulation.n_active_cells()
+           << " cells) would need about " << pd::format_bytes(need) << ", more than the "
+           << pd::format_bytes(memory->bytes) << " "
+           << (memory->source == "PD_MEMORY_LIMIT" ? "PD_MEMORY_LIMIT allows" : "available");
+      if (level == 0)
+        throw std::runtime_error(what.str() + ": coarsen the scene's smallest feature or raise "
+                                              "the memory limit");
+      std::cerr << "pd-fem: " << what.str() << ": refinement stops at " << level
+                << " levels (the finished ones are kept)" << std::endl;
+      stopped_for_memory = what.str();
+      break;
+    }
     levels.emplace_back();
     SceneLevel& l = levels.back();
     setup_system();

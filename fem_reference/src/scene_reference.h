@@ -15,6 +15,7 @@
 #include <deal.II/lac/trilinos_vector.h>
 #include <deal.II/lac/vector.h>
 #include <filesystem>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -32,9 +33,9 @@ struct SceneOptions {
 struct SceneLevel {
   unsigned int cells = 0;
   types::global_dof_index dofs = 0;
-  double h = 0.;       // target cell size of the level, m
-  double seconds = 0.; // wall time of the level
-  std::string solver; // solver_summary: how K u = f was solved
+  double h = 0.;              // target cell size of the level, m
+  double seconds = 0.;        // wall time of the level
+  std::string solver;         // solver_summary: how K u = f was solved
   std::vector<double> values; // one per probe
 };
 
@@ -66,6 +67,9 @@ private:
                    Vector<double>& cell_rhs) const;
   double reaction(const SceneProbe& probe) const;
   double normal_stress(const pd::Vec3& x, const std::vector<Tensor<1, dim>>& grad, int c) const;
+  void pin_rigid_motion(std::map<types::global_dof_index, double>& value) const;
+  void require_balanced_loads() const;
+  void remove_rigid_motion();
 
   const SceneProblem& problem;
   const SceneOptions options;
@@ -78,6 +82,9 @@ private:
   AffineConstraints<double> constraints;
   std::vector<unsigned int> component; // of each local shape function
   std::vector<types::global_dof_index> dof_component;
+  std::vector<Point<dim>> dof_points; // support point of each dof
+  // No support holds the body: its rigid motion is pinned, then removed (pin_rigid_motion).
+  bool free_body = false;
 
   TrilinosWrappers::SparseMatrix system_matrix;
   TrilinosWrappers::MPI::Vector system_rhs;
@@ -89,5 +96,6 @@ private:
   // Per load: force density [N/m³] on its cells on this level's mesh.
   std::vector<Tensor<1, dim>> load_density;
   std::vector<SceneLevel> levels;
+  std::string stopped_for_memory; // why refinement stopped before the levels asked for
 };
 } // namespace pdfem

@@ -84,6 +84,7 @@ struct Marks {
   std::vector<std::vector<YAML::Node>> body_box_nodes; ///< per body, per box
   std::vector<YAML::Node> body_nodes;                  ///< per body: its box(es) or shape
   std::vector<YAML::Node> support_nodes;               ///< where a support's own errors point
+  std::vector<YAML::Node> crack_nodes;                 ///< per crack: its segment or polygon
   std::vector<RegionUse> must_have_particles;          ///< bodies
   std::vector<RegionUse> must_touch_bodies;            ///< supports, loads, region probes
   std::vector<std::pair<Vec3, YAML::Node>> probe_points;

@@ -159,6 +159,11 @@ void read_cracks(Reader& r, ModelSpec& model, Marks& marks) {
       c.vertices.push_back(
           r.coordinates(n[k], fmt::format("point {} of {}", k + 1, f.label(key)), "m"));
     }
+    if (r.dim == 2 && c.vertices[0] == c.vertices[1]) {
+      // A crack of no length cuts no bond, and the FE reference cannot mesh a slit of none.
+      r.fail(n, fmt::format("crack '{}' has no length: its two points are the same", c.name),
+             "give the crack's two different end points");
+    }
     if (r.dim == 3) {
       const Vec3& a = c.vertices[0];
       const Vec3& b = c.vertices[1];
@@ -202,6 +207,7 @@ void read_cracks(Reader& r, ModelSpec& model, Marks& marks) {
       r.warn(n, fmt::format("crack '{}' lies outside every body: it cuts no bond", c.name));
     }
     model.cracks.push_back(std::move(c));
+    marks.crack_nodes.push_back(n);
   }
 }
 
