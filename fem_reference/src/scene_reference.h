@@ -32,9 +32,9 @@ struct SceneOptions {
 struct SceneLevel {
   unsigned int cells = 0;
   types::global_dof_index dofs = 0;
-  double h = 0.;       // target cell size of the level, m
-  double seconds = 0.; // wall time of the level
-  std::string solver; // solver_summary: how K u = f was solved
+  double h = 0.;              // target cell size of the level, m
+  double seconds = 0.;        // wall time of the level
+  std::string solver;         // solver_summary: how K u = f was solved
   std::vector<double> values; // one per probe
 };
 
@@ -61,6 +61,13 @@ private:
   double budget() const;
   void mesh(double h0, unsigned int level);
   void measure_loads();
+  unsigned int load_subdivisions(const typename DoFHandler<dim>::active_cell_iterator& cell) const;
+  // Calls add(x, JxW) at the points of the quadrature that integrates the loads over `cell`.
+  template <class Add>
+  void load_quadrature(const typename DoFHandler<dim>::active_cell_iterator& cell,
+                       FEValues<dim>& fe_values, UpdateFlags flags, Add&& add) const;
+  void add_pressure(const typename DoFHandler<dim>::active_cell_iterator& cell,
+                    Vector<double>& cell_rhs) const;
   void cell_system(const typename DoFHandler<dim>::active_cell_iterator& cell,
                    FEValues<dim>& fe_values, FullMatrix<double>& cell_matrix,
                    Vector<double>& cell_rhs) const;
