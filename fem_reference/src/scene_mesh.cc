@@ -107,8 +107,9 @@ DimTags add_region(const SolidRegion& region, const int dim, const double R) {
   return parts;
 }
 
-// Why: the body of the scene as CSG solids, split along the faces between bodies and of the
-// supports (intersected with the body first, so nothing outside it is added).
+// Why: the body of the scene as CSG solids, split along the faces between bodies, of the
+// supports and of the region loads' cells (intersected with the body first, so nothing outside
+// it is added).
 DimTags build_body(const SceneProblem& p, const int dim) {
   const double R = beyond(p);
   DimTags body, out;
@@ -278,7 +279,7 @@ double base_cell_size(const SceneProblem& problem, const bool gmsh) {
       for (const Solid& s : *list)
         if (s.kind == Solid::Kind::cylinder || s.kind == Solid::Kind::sphere)
           h = std::min(h, s.radius);
-  // Gmsh grades the cells between thin supports and the rest: starting from
+  // Gmsh grades the cells between thin supports or loaded layers and the rest: starting from
   // the largest size would leave distorted cells there.
   if (gmsh)
     for (const pd::Box& box : problem.conforming)

@@ -147,6 +147,7 @@ SceneLoad translate_load(const pd::ModelSpec& spec, const pd::ParticleSet& parti
     throw std::runtime_error("load '" + load.name + "' acts on no particle");
   out.cells = cells_of(spec, particles, members);
   out.bounds = cell_bounds(out.cells);
+  out.conforming = load.load.kind != Kind::point;
   switch (load.load.kind) {
   case Kind::body:
     out.density = true;
@@ -303,12 +304,15 @@ SceneProblem translate_scene(const pd::Scene& scene) {
   p.curved = p.curved || !p.cracks.empty();
 
   const pd::ParticleSet particles = scene_particles(scene);
-  // Why: a load's cells become grid planes of the tensor-product grid (nested, exact), but not
-  // faces of a Gmsh mesh: many small loaded cells on a curved body made as many features and
-  // slivers between them; the load integrals resolve the cells by quadrature there.
+  // Why: a load's cells become grid planes of the tensor-product grid (nested, exact) and, for
+  // region loads (layers, patches), faces of a Gmsh mesh. A point load's cells do not: many of
+  // them on a curved body made as many small features and slivers between them (80 loads on a
+  // hole failed after minutes); the load integrals resolve those cells by quadrature.
   for (const pd::LoadSpec& load : spec.loads) {
     p.loads.push_back(translate_load(spec, particles, load));
     const SceneLoad& l = p.loads.back();
+    if (l.conforming && !l.pressure)
+      p.conforming.push_back(l.bounds);
     if (!l.pressure)
       add_box_planes(l.bounds, dim, planes);
     else if (l.surface.kind == pd::Shape::Kind::box)

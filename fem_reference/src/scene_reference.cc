@@ -228,11 +228,11 @@ void SceneReference<dim>::setup_system() {
   solution.reinit(n);
 }
 
-// Why: a Gmsh mesh does not follow the loads (scene_problem.h), so a cell may hold part of a
-// load's lattice cells: the load integrals over it take Gauss points on sub-cells of about λ/4,
+// Why: a Gmsh mesh does not follow point loads (scene_problem.h), so a cell may hold part of such
+// a load's lattice cells: the load integrals over it take Gauss points on sub-cells of about λ/4,
 // which resolve the loaded cells' boundary to a quarter spacing (in 3D at most 16 sub-cells per
 // edge). 0: the cell's own quadrature is exact (the tensor-product grid, whose planes contain
-// the loaded cells, and cells away from every load).
+// the loaded cells, cells of the conforming loads, and cells away from every point load).
 template <int dim>
 unsigned int SceneReference<dim>::load_subdivisions(
     const typename DoFHandler<dim>::active_cell_iterator& cell) const {
@@ -242,7 +242,7 @@ unsigned int SceneReference<dim>::load_subdivisions(
   const double reach = problem.spacing; // curved faces bulge past the vertices' box
   bool touches = false;
   for (const SceneLoad& load : problem.loads) {
-    bool meets = !load.pressure;
+    bool meets = !load.pressure && !load.conforming;
     for (unsigned int a = 0; a < dim && meets; ++a)
       meets = load.bounds.lo[a] <= box.get_boundary_points().second[a] + reach &&
               box.get_boundary_points().first[a] - reach <= load.bounds.hi[a];
