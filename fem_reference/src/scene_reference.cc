@@ -8,6 +8,7 @@
 //     -div σ(u) = b      in Ω,        σ = λ tr ε I + 2 μ ε   (λ → λ* in plane stress),
 //     u_c = g_c          on the nodes of fixed / displacement supports (component c),
 //     u = 0              on the clamp plane of a mirror support,
+//     σ n = −p n         on the surface of a pressure load (where it bounds Ω),
 //     σ n = 0            elsewhere on ∂Ω,
 //
 // with b the loads as PD applies them: a resultant F shared among the particles a load selects
@@ -17,6 +18,7 @@
 // The mesh is a tensor-product grid whose lines contain every box face of bodies, supports and
 // loaded cells, subdivided to a target size, with the cells outside Ω removed; each level
 // refines it globally (h, h/2, h/4, ...), so Richardson extrapolation with ratio 2 applies.
+// Curved shapes are meshed by Gmsh from the geometry alone (scene_mesh.h).
 // Probes read what PD reads: the mean of a displacement component over the particles libpd
 // resolves for the probe (evaluated at their positions), or a support's reaction, the sum of
 // the residual K u - f over the dofs it constrains.
@@ -24,9 +26,11 @@
 
 #include "elastic_common.h"
 #include "libpd/core/memory.hpp"
+#include "libpd/discretisation/surface_load.hpp"
 #include "report.h"
 #include "scene_mesh.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <deal.II/base/quadrature_lib.h>
@@ -404,28 +408,75 @@ void SceneReference<dim>::remove_rigid_motion() {
     const Tensor<1, 3> rigid = mean + cross_product_3d(omega, r);
     solution[i] -= rigid[dof_component[i]];
   }
+// Why: a Gmsh mesh does not follow point loads (scene_problem.h), so a cell may hold part of such
+// a load's lattice cells: the load integrals over it take Gauss points on sub-cells of about λ/4,
+// which resolve the loaded cells' boundary to a quarter spacing (in 3D at most 16 sub-cells per
+// edge). 0: the cell's own quadrature is exact (the tensor-product grid, whose planes contain
+// the loaded cells, cells of the conforming loads, and cells away from every point load).
+template <int dim>
+unsigned int SceneReference<dim>::load_subdivisions(
+    const typename DoFHandler<dim>::active_cell_iterator& cell) const {
+  if (!use_gmsh)
+    return 0;
+  const BoundingBox<dim> box = cell->bounding_box();
+  const double reach = problem.spacing; // curved faces bulge past the vertices' box
+  bool touches = false;
+  for (const SceneLoad& load : problem.loads) {
+    bool meets = !load.pressure && !load.conforming;
+    for (unsigned int a = 0; a < dim && meets; ++a)
+      meets = load.bounds.lo[a] <= box.get_boundary_points().second[a] + reach &&
+              box.get_boundary_points().first[a] - reach <= load.bounds.hi[a];
+    touches = touches || meets;
+  }
+  if (!touches)
+    return 0;
+  const double cap = dim == 2 ? 256. : 16.;
+  return static_cast<unsigned int>(
+      std::clamp(std::ceil(4. * cell->diameter() / problem.spacing), 2., cap));
+}
+
+template <int dim>
+template <class Add>
+void SceneReference<dim>::load_quadrature(
+    const typename DoFHandler<dim>::active_cell_iterator& cell, FEValues<dim>& fv,
+    const UpdateFlags flags, Add&& add) const {
+  const unsigned int m = load_subdivisions(cell);
+  if (m == 0) {
+    for (const unsigned int q : fv.quadrature_point_indices())
+      add(fv, q);
+    return;
+  }
+  FEValues<dim> sub(*mapping, fe, QIterated<dim>(QGauss<1>(2), m), flags);
+  sub.reinit(cell);
+  for (const unsigned int q : sub.quadrature_point_indices())
+    add(sub, q);
 }
 
 // Why: PD conserves each load's resultant exactly, so the density F/V uses the volume V of the
-// loaded cells as this mesh integrates it (the same number as the particles' volumes when the
-// mesh resolves the cells, which the grid planes ensure for box regions). In 2D the problem is
-// per unit thickness t: V = area · t.
+// loaded cells as this mesh's load quadrature integrates it (the same number as the particles'
+// volumes when the mesh resolves the cells, which the grid planes ensure for box regions). In
+// 2D the problem is per unit thickness t: V = area · t.
 template <int dim>
 void SceneReference<dim>::measure_loads() {
   const QGauss<dim> quadrature(fe.degree + 1);
-  FEValues<dim> fv(*mapping, fe, quadrature, update_quadrature_points | update_JxW_values);
+  const UpdateFlags flags = update_quadrature_points | update_JxW_values;
+  FEValues<dim> fv(*mapping, fe, quadrature, flags);
   std::vector<double> volume(problem.loads.size(), 0.);
   for (const auto& cell : dof_handler->active_cell_iterators()) {
     fv.reinit(cell);
-    for (const unsigned int q : fv.quadrature_point_indices())
+    load_quadrature(cell, fv, flags, [&](const FEValues<dim>& v, const unsigned int q) {
       for (std::size_t l = 0; l < problem.loads.size(); ++l)
-        if (problem.loads[l].cells.contains(to_vec3(fv.quadrature_point(q))))
-          volume[l] += fv.JxW(q);
+        if (!problem.loads[l].pressure &&
+            problem.loads[l].cells.contains(to_vec3(v.quadrature_point(q))))
+          volume[l] += v.JxW(q);
+    });
   }
   const double thickness = dim == 2 ? problem.dimension.thickness : 1.;
   load_density.assign(problem.loads.size(), Tensor<1, dim>());
   for (std::size_t l = 0; l < problem.loads.size(); ++l) {
     const SceneLoad& load = problem.loads[l];
+    if (load.pressure)
+      continue;
     if (volume[l] <= 0.)
       throw std::runtime_error("load '" + load.name + "': its cells hold no part of the body");
     for (unsigned int c = 0; c < dim; ++c)
@@ -433,9 +484,45 @@ void SceneReference<dim>::measure_loads() {
   }
 }
 
+// Why: a pressure is the Neumann condition σn = −p n on the boundary faces that lie on its
+// surface (all vertices on one part of it, scene_problem.h), integrated with the mapping, so a
+// curved wall's normal turns along the face. The FE problem in 2D is per unit thickness: the
+// traction needs no thickness factor.
+template <int dim>
+void SceneReference<dim>::add_pressure(const typename DoFHandler<dim>::active_cell_iterator& cell,
+                                       Vector<double>& cell_rhs) const {
+  if (!cell->at_boundary())
+    return;
+  std::unique_ptr<FEFaceValues<dim>> fv;
+  for (const SceneLoad& load : problem.loads) {
+    if (!load.pressure)
+      continue;
+    const double tol = std::max(problem.tolerance(), 1e-6 * load.surface.radius);
+    for (const unsigned int f : cell->face_indices()) {
+      if (!cell->face(f)->at_boundary())
+        continue;
+      unsigned int shared = ~0U;
+      for (const unsigned int v : cell->face(f)->vertex_indices())
+        shared &= pd::surface_patches(load.surface, to_vec3(cell->face(f)->vertex(v)), dim, tol);
+      if (shared == 0)
+        continue;
+      if (!fv)
+        fv = std::make_unique<FEFaceValues<dim>>(*mapping, fe, QGauss<dim - 1>(fe.degree + 1),
+                                                 update_values | update_normal_vectors |
+                                                     update_JxW_values);
+      fv->reinit(cell, f);
+      for (const unsigned int q : fv->quadrature_point_indices())
+        for (unsigned int i = 0; i < fe.n_dofs_per_cell(); ++i)
+          cell_rhs(i) -= load.pressure_value * fv->normal_vector(q)[component[i]] *
+                         fv->shape_value_component(i, q, component[i]) * fv->JxW(q);
+    }
+  }
+}
+
 // Why: one cell's stiffness (elastic_common.h, with the Lamé constants of the body that holds
 // the cell's centre, E scaled by the material's stiffness factor as PD scales c) and its load
-// vector ∫ b·φ_i over the quadrature points inside each load's cells.
+// vector: ∫ b·φ_i over the load quadrature's points inside each load's cells, and the
+// pressures on its boundary faces.
 template <int dim>
 void SceneReference<dim>::cell_system(const typename DoFHandler<dim>::active_cell_iterator& cell,
                                       FEValues<dim>& fv, FullMatrix<double>& cell_matrix,
@@ -455,14 +542,16 @@ void SceneReference<dim>::cell_system(const typename DoFHandler<dim>::active_cel
                                             problem.plane_stress());
   std::vector<Tensor<1, dim>> grad;
   add_elastic_cell_matrix(fv, component, lame, grad, cell_matrix);
-  for (const unsigned int q : fv.quadrature_point_indices()) {
-    const pd::Vec3 x = to_vec3(fv.quadrature_point(q));
-    for (std::size_t l = 0; l < problem.loads.size(); ++l)
-      if (problem.loads[l].cells.contains(x))
-        for (unsigned int i = 0; i < n; ++i)
-          cell_rhs(i) += fv.shape_value_component(i, q, component[i]) *
-                         load_density[l][component[i]] * fv.JxW(q);
-  }
+  load_quadrature(cell, fv, update_values | update_quadrature_points | update_JxW_values,
+                  [&](const FEValues<dim>& v, const unsigned int q) {
+                    const pd::Vec3 x = to_vec3(v.quadrature_point(q));
+                    for (std::size_t l = 0; l < problem.loads.size(); ++l)
+                      if (!problem.loads[l].pressure && problem.loads[l].cells.contains(x))
+                        for (unsigned int i = 0; i < n; ++i)
+                          cell_rhs(i) += v.shape_value_component(i, q, component[i]) *
+                                         load_density[l][component[i]] * v.JxW(q);
+                  });
+  add_pressure(cell, cell_rhs);
 }
 
 template <int dim>

@@ -62,6 +62,13 @@ private:
   double budget() const;
   void mesh(double h0, unsigned int level);
   void measure_loads();
+  unsigned int load_subdivisions(const typename DoFHandler<dim>::active_cell_iterator& cell) const;
+  // Calls add(x, JxW) at the points of the quadrature that integrates the loads over `cell`.
+  template <class Add>
+  void load_quadrature(const typename DoFHandler<dim>::active_cell_iterator& cell,
+                       FEValues<dim>& fe_values, UpdateFlags flags, Add&& add) const;
+  void add_pressure(const typename DoFHandler<dim>::active_cell_iterator& cell,
+                    Vector<double>& cell_rhs) const;
   void cell_system(const typename DoFHandler<dim>::active_cell_iterator& cell,
                    FEValues<dim>& fe_values, FullMatrix<double>& cell_matrix,
                    Vector<double>& cell_rhs) const;

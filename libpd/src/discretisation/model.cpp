@@ -1,6 +1,7 @@
 #include "libpd/discretisation/model.hpp"
 
 #include "libpd/discretisation/bond_cuts.hpp"
+#include "libpd/discretisation/surface_load.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -489,6 +490,22 @@ std::vector<double> load_force_densities(const ModelSpec& spec, const ParticleSe
     force_density.assign(3 * particles.size(), 0.0);
   }
   for (const LoadSpec& load : spec.loads) {
+    if (load.load.kind == BoxRegionLoad::Kind::pressure) {
+      const SurfaceForces forces =
+          pressure_forces(spec.dimension, spec.lattice.spacing, spec.bodies, particles, body_count,
+                          load.load.surface, load.load.pressure);
+      if (forces.particle.empty()) {
+        throw std::runtime_error("pressure load '" + load.name +
+                                 "' acts on no particle: its surface bounds no body");
+      }
+      for (std::size_t k = 0; k < forces.particle.size(); ++k) {
+        const std::uint32_t i = forces.particle[k];
+        for (std::size_t c = 0; c < 3; ++c) {
+          force_density[3 * i + c] += forces.force[k][c] / particles.volume[i];
+        }
+      }
+      continue;
+    }
     const auto members = load_particles(spec, particles, load, body_count);
     if (members.empty()) {
       throw std::runtime_error("load '" + load.name + "' acts on no particle");
@@ -511,6 +528,8 @@ std::vector<double> load_force_densities(const ModelSpec& spec, const ParticleSe
       case BoxRegionLoad::Kind::per_length:
         density = load.load.value[c] * load.load.measure / total_volume;
         break;
+      case BoxRegionLoad::Kind::pressure:
+        break;
       }
       for (std::uint32_t i : members) {
         force_density[3 * i + c] += density;
@@ -526,6 +545,11 @@ std::vector<std::uint32_t> load_particles(const ModelSpec& spec, const ParticleS
                                           const LoadSpec& load, std::size_t body_count) {
   const int dim = spec.dimension.dim;
   const std::size_t n = std::min(body_count, particles.size());
+  if (load.load.kind == BoxRegionLoad::Kind::pressure) {
+    return pressure_forces(spec.dimension, spec.lattice.spacing, spec.bodies, particles, n,
+                           load.load.surface, load.load.pressure)
+        .particle;
+  }
   if (load.load.kind != BoxRegionLoad::Kind::point) {
     return particles_in(particles, load.load.region, dim, region_tolerance(spec), n);
   }

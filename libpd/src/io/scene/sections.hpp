@@ -105,6 +105,8 @@ std::optional<Shape> read_body_shape(Reader& r, const Fields& f);
 void read_cracks(Reader& r, ModelSpec& model, Marks& marks);
 /// A body's `minus` list: the shapes taken out of it.
 std::vector<Shape> read_minus(Reader& r, const Fields& f);
+/// The `surface` section of `f` (a pressure load's shape: box, cylinder or sphere).
+Shape read_surface(Reader& r, const Fields& f);
 void read_supports(Reader& r, ModelSpec& model, Marks& marks);
 void read_loads(Reader& r, ModelSpec& model, Marks& marks);
 /// `effects` and the `model` section.

@@ -108,6 +108,40 @@ constinit const Section shape_section{"in a shape of 'minus'", shape_keys};
 
 namespace {
 
+constexpr Key surface_keys[] = {
+    {.name = "box",
+     .type = Type::box,
+     .doc = "a box [[lo], [hi]]: its faces",
+     .unit = "m",
+     .example = "[[0, 0, 0], [1, 0.1, 0.1]]",
+     .need = Need::one_of,
+     .group = 1},
+    shape_key("cylinder",
+              "a cylinder (2D: a disk): its wall, and in 3D its ends if it has a 'length'",
+              &cylinder_section),
+    shape_key("sphere", "a sphere (2D: a disk)", &sphere_section),
+};
+
+} // namespace
+
+constinit const Section surface_section{"in the surface of a load", surface_keys};
+
+Shape read_surface(Reader& r, const Fields& parent) {
+  const Fields f = r.section(parent, "surface");
+  Shape s;
+  if (const Entry* b = f.find("box")) {
+    s.kind = Shape::Kind::box;
+    s.box = r.box(b->at(), f.label("box"));
+  } else if (f.has("cylinder") || f.has("sphere")) {
+    s = read_round(r, f, f.has("cylinder") ? "cylinder" : "sphere");
+  } else {
+    r.lookup(f, "box"); // reports the missing alternatives
+  }
+  return s;
+}
+
+namespace {
+
 constexpr Key crack_keys[] = {
     name_key("unique name of the crack", "notch"),
     {.name = "segment",
