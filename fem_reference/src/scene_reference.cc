@@ -408,6 +408,8 @@ void SceneReference<dim>::remove_rigid_motion() {
     const Tensor<1, 3> rigid = mean + cross_product_3d(omega, r);
     solution[i] -= rigid[dof_component[i]];
   }
+}
+
 // Why: a Gmsh mesh does not follow point loads (scene_problem.h), so a cell may hold part of such
 // a load's lattice cells: the load integrals over it take Gauss points on sub-cells of about λ/4,
 // which resolve the loaded cells' boundary to a quarter spacing (in 3D at most 16 sub-cells per
