@@ -283,7 +283,7 @@ Command add_verify_command(CLI::App& app) {
           },
           "FRACTION in (0, 1]"));
   add_threads_option(*cmd, a->threads);
-  return {cmd, [a] { return verify(*a); }};
+  return {cmd, [a] { return verify(*a); }, true};
 }
 
 } // namespace pd::cli
