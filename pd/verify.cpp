@@ -469,7 +469,7 @@ Command add_verify_command(CLI::App& app) {
                   "one testcase per probe; failed is a failure, measured and interrupted are "
                   "skipped) for CI systems");
   add_threads_option(*cmd, a->threads);
-  return {cmd, [a] { return verify(*a); }};
+  return {cmd, [a] { return verify(*a); }, true};
 }
 
 } // namespace pd::cli
