@@ -190,6 +190,16 @@ double crack_extension(const Model& model, const std::vector<double>& damage, do
   return extension;
 }
 
+/// Body particles that lost a bond more than a horizon away from the crack plane: damage that is
+/// not the crack's (at the grips, say), whose bonds' energy summary.json counts all the same.
+std::size_t damaged_off_plane(const Model& model, const std::vector<double>& damage, double mid) {
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < model.body_particle_count() && i < damage.size(); ++i) {
+    n += damage[i] > 0 && std::abs(model.particles.position[i][1] - mid) > model.horizon() ? 1 : 0;
+  }
+  return n;
+}
+
 // The energy the specimen lost, by a global balance: the grips' work minus the energy stored at
 // the end. Between two recorded states the bonds are those of the later one and the force is
 // linear in the opening through the origin, so each piece of work is exact.
@@ -330,6 +340,7 @@ Json run_dcb(const Context& ctx, const std::string& name, double refine) {
   pd["growth_points"] = growth.points;
   pd["growth_load_ratio_mean_all_critical_states"] = growth.all_ratio;
   pd["load_line"] = load_line;
+  pd["damaged_particles_off_plane"] = damaged_off_plane(model, r.damage, mid);
   pd["growth_exponent"] = growth.exponent;
   pd["dissipated_energy"] = dissipated;
   pd["released_energy_balance"] = released;
