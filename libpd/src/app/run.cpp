@@ -588,6 +588,7 @@ private:
           out_.displacement[3 * i + c] = sim_->displacement(i, c);
         }
       }
+      out_.damage = sim_->model().state.damage;
     }
   }
 

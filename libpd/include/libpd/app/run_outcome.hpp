@@ -39,6 +39,9 @@ struct RunOutcome {
   /// particle), e.g. to extract deflection lines.
   std::vector<Vec3> positions;
   std::vector<double> displacement;
+  /// With RunOptions::keep_final_field and the damage effect: each particle's damage index φ
+  /// (empty without damage), e.g. to measure how far a crack has grown.
+  std::vector<double> damage;
   std::filesystem::path checkpoint; ///< last checkpoint written (empty: none)
   std::size_t checkpoint_step = 0;  ///< its step
   std::size_t checkpoints_written = 0;
