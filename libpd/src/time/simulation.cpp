@@ -5,6 +5,7 @@
 #include "libpd/kernel/round_off.hpp"
 #include "libpd/kernel/stable_time_step.hpp"
 #include "libpd/time/energy_watch.hpp"
+#include "libpd/time/static_solver.hpp"
 
 #include <algorithm>
 #include <array>
@@ -276,6 +277,13 @@ RunResult Simulation::run(const Observer& observer) {
     if (!(rep.max_displacement_squared <= blowup_squared_)) {
       r.status = RunStatus::unstable;
       const bool finite = std::isfinite(rep.max_displacement_squared);
+      if (solver_.integrator == IntegratorKind::static_solve) {
+        // An equilibrium far outside the elastic range, not a growing mode: no step to shorten.
+        r.message =
+            fmt::format("the static solution passed solver.blowup_displacement ({:.3g} m): it {}",
+                        std::sqrt(blowup_squared_), static_state_report(model_, state_.position));
+        break;
+      }
       r.message = unstable_message(
           finite ? fmt::format("a displacement reached {:.3g} m, beyond the blow-up limit {:.3g} m",
                                std::sqrt(rep.max_displacement_squared), std::sqrt(blowup_squared_))
