@@ -7,7 +7,6 @@
 #include "libpd/discretisation/model.hpp"
 
 #include <cstddef>
-#include <string>
 #include <vector>
 
 namespace pd {
@@ -31,12 +30,5 @@ struct StaticSystem {
 /// out) with the model's supports substituted: prescribed values to the right-hand side, mirror
 /// dependants' columns onto their masters (and, under consistent coupling, their rows too).
 StaticSystem assemble_static_system(const Model& model);
-
-/// Why a static solve's answer is no answer, in the user's terms, as a predicate ("moves a
-/// particle …"): the largest displacement of `position` (3N, y = X + u) against the body's size and
-/// the largest bond strain, and, beyond the body's size or a strain of 1, that the loads ask for
-/// more than the elastic range holds. A static solve has no Δt, so the explicit runs' instability
-/// advice does not apply to it.
-std::string static_state_report(const Model& model, const std::vector<double>& position);
 
 } // namespace pd
