@@ -15,13 +15,13 @@ namespace pd::cli {
 /// A subcommand: `run` is called after parsing if `app` was chosen and returns the exit code
 /// (0 success, 1 bad input or usage, 2 a verification gate failed, 3 the run became unstable,
 /// 4 a stability gate failed, 5 the run was interrupted).
-/// Exit code of a run stopped by Ctrl-C, SIGTERM or SIGHUP (its results so far are written):
-/// not 0, so that a script or scheduler never takes a partial run for a finished one.
+/// Exit code of a run stopped by Ctrl-C, SIGTERM, SIGHUP or SIGUSR1 (its results so far are
+/// written): not 0, so that a script or scheduler never takes a partial run for a finished one.
 inline constexpr int exit_interrupted = pd::exit_status_interrupted;
 
 /// For a command with nothing to save on a stop request (pd bench, pd compare: what they print
-/// or write is complete row by row): Ctrl-C, SIGTERM or SIGHUP end it within a second, with exit
-/// status 5 and a line on stderr that says so (app/interrupt.hpp).
+/// or write is complete row by row): Ctrl-C, SIGTERM, SIGHUP or SIGUSR1 end it within a second,
+/// with exit status 5 and a line on stderr that says so (app/interrupt.hpp).
 class StopOnInterrupt {
 public:
   explicit StopOnInterrupt(std::string command);

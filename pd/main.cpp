@@ -12,11 +12,12 @@
 //   pd section SCENE [--depth z] [--plate]    PD/continuum stiffness of a beam or plate section
 //
 // Exit codes: 0 success, 1 bad input or usage, 2 a verification gate failed, 3 the run became
-// unstable, 4 a stability gate failed, 5 the run was interrupted (Ctrl-C, SIGTERM, SIGHUP).
+// unstable, 4 a stability gate failed, 5 the run was interrupted (a stop signal).
 #include "commands.hpp"
 #include "libpd/app/interrupt.hpp"
 #include "libpd/core/blas.hpp"
 #include "libpd/core/communicator.hpp"
+#include "libpd/core/stop_signals.hpp"
 #include "libpd/core/text.hpp"
 
 #include <algorithm>
@@ -29,15 +30,15 @@
 
 namespace {
 /// Before the libraries' initialisers (OpenMPI's, OpenBLAS's take most of pd's first tenth of a
-/// second): SIGINT, SIGTERM and SIGHUP are blocked, not lost and not fatal, until main holds them
-/// as a stop request (pd::hold_stop_requests). Threads those initialisers start keep them
-/// blocked, so a signal always reaches a thread that takes it.
+/// second): the stop signals (core/stop_signals.hpp) are blocked, not lost and not fatal, until
+/// main holds them as a stop request (pd::hold_stop_requests). Threads those initialisers start
+/// keep them blocked, so a signal always reaches a thread that takes it.
 void block_stop_signals(int /*argc*/, char** /*argv*/, char** /*envp*/) {
   sigset_t stop;
   sigemptyset(&stop);
-  sigaddset(&stop, SIGINT);
-  sigaddset(&stop, SIGTERM);
-  sigaddset(&stop, SIGHUP);
+  for (const int sig : pd::stop_signals) {
+    sigaddset(&stop, sig);
+  }
   sigprocmask(SIG_BLOCK, &stop, nullptr);
 }
 // NOLINTNEXTLINE: the ELF hook that runs before every shared library's initialiser.

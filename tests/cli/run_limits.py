@@ -56,6 +56,28 @@ class RunLimits(pdcli.TestCase):
             warnings = json.load(f).get("warnings", [])
         self.assertTrue(any("takes no step" in w for w in warnings), warnings)
 
+    # Item 11: a static solve under a load far beyond the elastic range was called "unstable"
+    # with advice about Δt and mirror clamps; it has no Δt. The message must say what the
+    # solution did: a displacement beyond the body's size, a bond strain above 1.
+    def test_a_static_solve_beyond_the_elastic_range_says_so(self):
+        text = pdcli.TINY_SCENE.format(effects="", integrator="static", dt="auto",
+                                       end_time="2e-4", solver_extra="", vtu="false",
+                                       vtu_every=100)
+        text = text.replace("effects: []\n", "").replace("value: [1e3, 0, 0]", "value: [0, 1e10, 0]")
+        r = self.pd("run", self.scene("static.yaml", text=text), "-o", self.path("out"))
+        self.assertEqual(r.returncode, 3, r.stderr)
+        m = re.search(r"the static solution passed solver.blowup_displacement \((\S+) m\): it "
+                      r"moves a particle (\S+) m \(the body is (\S+) m across\) and strains a "
+                      r"bond by (\S+): the loads and prescribed displacements ask for strains far "
+                      r"beyond the small-strain range", r.stderr)
+        self.assertIsNotNone(m, r.stderr)
+        limit, moved, size, strain = map(float, m.groups())
+        self.assertGreater(moved, size)
+        self.assertGreater(moved, limit)
+        self.assertGreater(strain, 1)
+        self.assertNotIn("mirror", r.stderr)
+        self.assertNotIn("solver.dt", r.stderr)
+
     # Item 11: SIGTERM during the set-up killed the process (exit 143, no summary).
     def test_sigterm_during_set_up_stops_cleanly(self):
         # 150,000 particles: a set-up of about a second; the signal arrives once the folder is

@@ -458,7 +458,8 @@ private:
     log.push_back("crack " + emit(crack));
   }
 
-  /// A small valid particle file, one with a NUL byte in a cell, and paths that are no files.
+  /// A small valid particle file, one with a NUL byte in a cell, one with a volume of 1e300 m³,
+  /// one with a particle 1e12 m out, and paths that are no files.
   static const std::vector<std::string>& particle_files() {
     static const std::vector<std::string> files = [] {
       const fs::path dir = fs::temp_directory_path();
@@ -471,10 +472,15 @@ private:
         }
       }
       std::ofstream(good, std::ios::binary) << csv;
+      const fs::path huge = dir / "pd-fuzz-particles-huge.csv";
+      const fs::path far = dir / "pd-fuzz-particles-far.csv";
+      std::ofstream(huge, std::ios::binary) << csv << "0.08,0,1e300\n";
+      std::ofstream(far, std::ios::binary) << csv << "1e12,0,1e-4\n";
       std::ofstream(nul, std::ios::binary)
           << std::string("x,y,volume\n0,0,1e-4\n0.01,0") + '\0' + ",1e-4\n";
-      return std::vector<std::string>{good.string(), nul.string(), "/nonexistent/p.csv",
-                                      "/dev/zero", dir.string()};
+      return std::vector<std::string>{good.string(), nul.string(),         huge.string(),
+                                      far.string(),  "/nonexistent/p.csv", "/dev/zero",
+                                      dir.string()};
     }();
     return files;
   }

@@ -18,9 +18,17 @@
         pieces were written (the older set must be used) and killed while they were renamed into
         place (the newer set must be finished); either restart must end as the run never
         stopped. SCENE must end at step 900 (fracture-adr.yaml).
+    mpi_test.py stop PD MPIEXEC SCENE WORKDIR N
+        on N ranks (issue 38, item 11): a stop request sent to mpirun. SIGUSR1, which OpenMPI
+        forwards to every rank, ends the job with the run's exit 5, an interrupted summary and a
+        complete checkpoint set that restarts. SIGTERM is mpirun's own abort (exit 1 whatever
+        the ranks return, SIGKILL one second after it signals them): every rank must still have
+        stopped cleanly within that second, with the same files. SCENE runs far longer than the
+        test waits (its end_time is raised).
 
 MPIEXEC may carry options ("mpiexec --oversubscribe"); as root, --allow-run-as-root is added.
 """
+import json
 import os
 import shlex
 import signal
@@ -212,6 +220,47 @@ def set_recovery(pd, mpiexec, scene, work, n):
     restart(renaming, 900)
 
 
+def stop(pd, mpiexec, scene, work, n):
+    long_scene = work / "long.yaml"
+    text = Path(scene).read_text()
+    if "end_time: 900" not in text:
+        fail("the stop test needs a scene ending at end_time: 900 (fracture-adr.yaml)")
+    long_scene.write_text(text.replace("end_time: 900", "end_time: 1e7"))
+    for sig, name in ((signal.SIGUSR1, "SIGUSR1"), (signal.SIGTERM, "SIGTERM")):
+        out = work / name
+        cmd = [*launcher(mpiexec, n), pd, "run", str(long_scene), "-o", str(out), "--threads",
+               "1", "--checkpoint-every", "300"]
+        proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                                start_new_session=True, env=dict(os.environ, OMP_NUM_THREADS="1"))
+        deadline = time.monotonic() + 120
+        while not (out / "particles-00000300.pvtu").exists():  # every rank is stepping
+            if proc.poll() is not None or time.monotonic() > deadline:
+                kill_all(proc.pid)
+                fail(f"{name}: the run ended or never started:\n{proc.communicate()[1]}")
+            time.sleep(0.01)
+        proc.send_signal(sig)  # to mpirun alone, as a scheduler or a user would
+        try:
+            _, err = proc.communicate(timeout=60)
+        except subprocess.TimeoutExpired:
+            kill_all(proc.pid)
+            fail(f"{name} to mpirun: the job did not end within 60 s")
+        print(f"{name} to mpirun: exit {proc.returncode}")
+        if sig == signal.SIGUSR1 and proc.returncode != 5:
+            fail(f"SIGUSR1 to mpirun should end the job with the run's exit 5:\n{err}")
+        summary = out / "summary.json"
+        if not summary.exists() or json.loads(summary.read_text())["status"] != "interrupted":
+            fail(f"{name}: no interrupted summary.json (a rank did not stop cleanly):\n{err}")
+        # The set is whole: the restart reads every piece and carries on from its step.
+        steps = json.loads(summary.read_text())["steps"]
+        more = work / f"{name}.yaml"
+        more.write_text(text.replace("end_time: 900", f"end_time: {steps + 10}"))
+        first = pd_run(pd, mpiexec, n, str(more), out, [
+            "--checkpoint-every", "300", "--restart", str(out / "checkpoint.pdcp")
+        ]).splitlines()[0]
+        print(f"{name}: stopped at step {steps}; {first}")
+        if int(first.rsplit(" ", 1)[1]) != steps:
+            fail(f"{name}: the restart did not start from the interrupted step {steps}: {first}")
+
 def main():
     if len(sys.argv) != 7:
         fail(__doc__)
@@ -225,6 +274,8 @@ def main():
         errors(pd, mpiexec, scene, work, int(counts))
     elif mode == "set-recovery":
         set_recovery(pd, mpiexec, scene, work, int(counts))
+    elif mode == "stop":
+        stop(pd, mpiexec, scene, work, int(counts))
     elif mode == "kill-restart":
         kill_restart(pd, mpiexec, scene, work, int(counts))
     else:

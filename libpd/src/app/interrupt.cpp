@@ -19,8 +19,7 @@ namespace {
 std::atomic<int> stop_signal{0};  // lock-free: the one thing a handler may touch
 std::atomic<int> guard_depth{0};  // guards alive; only the main thread makes them
 std::atomic<bool> holding{false}; // hold_stop_requests() is in force: requests are kept
-constexpr int stop_signals[] = {SIGINT, SIGTERM, SIGHUP};
-struct sigaction before_holding[3]{};
+struct sigaction before_holding[stop_signals.size()]{};
 
 extern "C" void on_stop_signal(int sig) {
   int none = 0;
@@ -120,8 +119,8 @@ InterruptGuard::InterruptGuard(bool active) : active_(active) {
   sa.sa_handler = on_stop_signal;
   sigemptyset(&sa.sa_mask);
   sa.sa_flags = SA_RESTART; // a write interrupted by the signal carries on
-  for (int k = 0; k < 3; ++k) {
-    sigaction(signals_[k], &sa, &previous_[k]);
+  for (std::size_t k = 0; k < stop_signals.size(); ++k) {
+    sigaction(stop_signals[k], &sa, &previous_[k]);
   }
 }
 
@@ -131,8 +130,8 @@ InterruptGuard::~InterruptGuard() {
   }
   guard_depth.fetch_sub(1);
   if (outermost_) {
-    for (int k = 0; k < 3; ++k) {
-      sigaction(signals_[k], &previous_[k], nullptr);
+    for (std::size_t k = 0; k < stop_signals.size(); ++k) {
+      sigaction(stop_signals[k], &previous_[k], nullptr);
     }
   }
 }
@@ -152,7 +151,7 @@ void hold_stop_requests() {
   sa.sa_flags = SA_RESTART;
   sigset_t held;
   sigemptyset(&held);
-  for (int k = 0; k < 3; ++k) {
+  for (std::size_t k = 0; k < stop_signals.size(); ++k) {
     sigaction(stop_signals[k], &sa, &before_holding[k]);
     sigaddset(&held, stop_signals[k]);
   }
@@ -165,7 +164,7 @@ void release_stop_requests() {
   if (!holding.exchange(false)) {
     return;
   }
-  for (int k = 0; k < 3; ++k) {
+  for (std::size_t k = 0; k < stop_signals.size(); ++k) {
     sigaction(stop_signals[k], &before_holding[k], nullptr);
   }
   if (const int sig = stop_signal.exchange(0); sig != 0) {

@@ -1,5 +1,7 @@
 #include "libpd/core/blas.hpp"
 
+#include "libpd/core/stop_signals.hpp"
+
 #include <csignal>
 #include <cstdlib>
 #include <dlfcn.h>
@@ -65,7 +67,7 @@ void restart_with_process_settings(char** argv) {
     sigset_t stop;
     sigset_t before;
     sigemptyset(&stop);
-    for (const int sig : {SIGINT, SIGTERM, SIGHUP}) {
+    for (const int sig : stop_signals) {
       sigaddset(&stop, sig);
     }
     sigprocmask(SIG_BLOCK, &stop, &before);

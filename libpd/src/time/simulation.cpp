@@ -276,6 +276,13 @@ RunResult Simulation::run(const Observer& observer) {
     if (!(rep.max_displacement_squared <= blowup_squared_)) {
       r.status = RunStatus::unstable;
       const bool finite = std::isfinite(rep.max_displacement_squared);
+      if (solver_.integrator == IntegratorKind::static_solve) {
+        // An equilibrium far outside the elastic range, not a growing mode: no step to shorten.
+        r.message =
+            fmt::format("the static solution passed solver.blowup_displacement ({:.3g} m): it {}",
+                        std::sqrt(blowup_squared_), static_state_report(model_, state_.position));
+        break;
+      }
       r.message = unstable_message(
           finite ? fmt::format("a displacement reached {:.3g} m, beyond the blow-up limit {:.3g} m",
                                std::sqrt(rep.max_displacement_squared), std::sqrt(blowup_squared_))
@@ -332,6 +339,51 @@ RunResult Simulation::run(const Observer& observer) {
   }
   r.wall_seconds = std::chrono::duration<double>(clock::now() - start).count();
   return r;
+}
+
+std::string static_state_report(const Model& m, const std::vector<double>& position) {
+  const ParticleSet& p = m.particles;
+  Vec3 lo = p.position.empty() ? Vec3{0, 0, 0} : p.position.front();
+  Vec3 hi = lo;
+  double moved = 0;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    double u2 = 0;
+    for (std::size_t a = 0; a < 3; ++a) {
+      lo[a] = std::min(lo[a], p.position[i][a]);
+      hi[a] = std::max(hi[a], p.position[i][a]);
+      const double u = position[3 * i + a] - p.position[i][a];
+      u2 += u * u;
+    }
+    moved = u2 <= moved * moved ? moved : std::sqrt(u2); // NaN is kept, not skipped
+  }
+  const double size =
+      std::sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
+                (hi[2] - lo[2]) * (hi[2] - lo[2]));
+  double strain = 0;
+  const BondFamily& f = m.family;
+  for (std::size_t i = 0; i < f.particle_count(); ++i) {
+    for (std::size_t k = f.offsets[i]; k < f.offsets[i + 1]; ++k) {
+      const std::size_t j = f.neighbour[k];
+      double l2 = 0;
+      for (std::size_t a = 0; a < 3; ++a) {
+        const double d = position[3 * j + a] - position[3 * i + a];
+        l2 += d * d;
+      }
+      const double e = std::abs(std::sqrt(l2) * f.inverse_length[k] - 1);
+      strain = e <= strain ? strain : e;
+    }
+  }
+  std::string what = std::isfinite(moved) && std::isfinite(strain)
+                         ? fmt::format("moves a particle {:.3g} m (the body is {:.3g} m across) "
+                                       "and strains a bond by {:.3g}",
+                                       moved, size, strain)
+                         : std::string("leaves positions that are not finite numbers");
+  if (!(strain <= 1) || !(moved <= size)) {
+    what += ": the loads and prescribed displacements ask for strains far beyond the small-strain "
+            "range the material's moduli describe: lower them (Δt plays no part in a static "
+            "solve)";
+  }
+  return what;
 }
 
 } // namespace pd

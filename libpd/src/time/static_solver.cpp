@@ -330,7 +330,8 @@ private:
     // thrown: the break event that follows changes the problem, and a load-stepping driver
     // records each level's state.
     if (!newton_converged_ && !model_.effects.damage) {
-      throw std::runtime_error(fmt::format("static solve did not converge: {}", report_));
+      throw std::runtime_error(fmt::format("static solve did not converge: {}; the last iterate {}",
+                                           report_, static_state_report(model_, st.position)));
     }
   }
 

@@ -1337,6 +1337,55 @@ TEST(SceneParser, ParticleFileCountsInTheMemoryGuard) {
   ::unsetenv("PD_MEMORY_LIMIT");
 }
 
+/// The 8 × 8 particles of ParticleFileBodyIsReadAndBuilt, each of volume `volume`, then `extra`.
+std::string particle_grid(const std::string& volume, const std::string& extra = "") {
+  std::string csv = "x,y,volume\n";
+  for (int j = 0; j < 8; ++j) {
+    for (int i = 0; i < 8; ++i) {
+      csv += std::to_string(0.1 * i + 0.013 * (j % 3)) + "," + std::to_string(0.1 * j) + "," +
+             volume + "\n";
+    }
+  }
+  return csv + extra;
+}
+
+/// The message of the SceneError parsing `text` throws, at line 12 (the body's `particles`).
+std::string particle_body_error(const std::string& text) {
+  try {
+    pd::parse_scene(text, "s.yaml");
+  } catch (const pd::SceneError& e) {
+    EXPECT_EQ(e.mark().line, 12) << e.what();
+    return e.what();
+  }
+  ADD_FAILURE() << "parsed";
+  return "";
+}
+
+// Issue 38, item 11: a particle volume of 1e300 m³ ran (strain energy 4e278 J, exit 0) or ended
+// in "no usable time step ... does the model have bonds?"; it is refused against the cell of the
+// particle's size, naming the particle.
+TEST(SceneParser, ParticleVolumeFarBeyondItsCellIsRefused) {
+  const std::string ok =
+      particle_body_error(particle_scene(particle_grid("1e300"), "virtual-fibres"));
+  EXPECT_NE(ok.find("particle 1 of body 'plate' has volume 1e+300 m³ (with the thickness), "),
+            std::string::npos)
+      << ok;
+  EXPECT_NE(ok.find("a particle may be at most 1000 cells"), std::string::npos) << ok;
+  // Volumes of about one cell pass (the plate's cells are 0.1 m wide, thickness 1 m).
+  EXPECT_NO_THROW(pd::parse_scene(particle_scene(particle_grid("0.01"), "virtual-fibres"), "s"));
+}
+
+// Issue 38, item 11: a particle at x = 1e12 m was refused as "a box of body" (its bounding box),
+// earlier as beyond "32-bit particles"; the message names the particle and the bound.
+TEST(SceneParser, ParticleFarFromTheOriginIsRefusedByName) {
+  const std::string m =
+      particle_body_error(particle_scene(particle_grid("0.01", "1e12,0,0.01\n"), "virtual-fibres"));
+  EXPECT_NE(m.find("particle 65 of body 'plate' has a coordinate 1000000000000 m, more than 10^9 "
+                   "spacings"),
+            std::string::npos)
+      << m;
+}
+
 TEST(SceneParser, ParticleFileWithBadContentIsRefusedNamingFileAndRow) {
   const std::string text =
       particle_scene("x,y,volume\n0,0,0.01\n0.1,0,0.01\n0,0,0.01\n", "virtual-fibres");

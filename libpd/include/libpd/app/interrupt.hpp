@@ -1,21 +1,24 @@
-// Stopping a run from outside: Ctrl-C (SIGINT), a scheduler's SIGTERM before its SIGKILL, and a
-// closed terminal's SIGHUP only set a flag, which the run polls after each step and then stops
-// cleanly (status `interrupted`, outputs and a checkpoint written) instead of dying with
-// half-written files. Work that cannot poll (building a model, CHOLMOD's factorisation, a
-// verification case) is abandoned instead: a watchdog thread writes what is known and ends the
-// process, so that every phase answers within a second.
+// Stopping a run from outside: Ctrl-C (SIGINT), a scheduler's SIGTERM before its SIGKILL, a closed
+// terminal's SIGHUP and SIGUSR1 (what mpirun forwards; core/stop_signals.hpp) only set a flag,
+// which the run polls after each step and then stops cleanly (status `interrupted`, outputs and a
+// checkpoint written) instead of dying with half-written files. Work that cannot poll (building a
+// model, CHOLMOD's factorisation, a verification case) is abandoned instead: a watchdog thread
+// writes what is known and ends the process, so that every phase answers within a second.
 #pragma once
+
+#include "libpd/core/stop_signals.hpp"
 
 #include <csignal>
 #include <functional>
 
 namespace pd {
 
-/// While alive (and `active`), SIGINT, SIGTERM and SIGHUP request a stop instead of ending the
-/// process; later signals only repeat the request, so a second Ctrl-C while the final files are
-/// written cannot cut them short. The previous handlers are put back on destruction. Guards nest
-/// (a run inside `pd verify`): only the outermost installs the handlers and forgets requests from
-/// before its construction, so an inner one never loses a request the outer one has seen.
+/// While alive (and `active`), the stop signals (SIGINT, SIGTERM, SIGHUP, SIGUSR1) request a stop
+/// instead of ending the process; later signals only repeat the request, so a second Ctrl-C while
+/// the final files are written cannot cut them short. The previous handlers are put back on
+/// destruction. Guards nest (a run inside `pd verify`): only the outermost installs the handlers
+/// and forgets requests from before its construction, so an inner one never loses a request the
+/// outer one has seen.
 class InterruptGuard {
 public:
   explicit InterruptGuard(bool active);
@@ -24,18 +27,17 @@ public:
   InterruptGuard& operator=(const InterruptGuard&) = delete;
 
   bool requested() const;
-  /// The signal that asked for the stop (SIGINT, SIGTERM or SIGHUP), 0 if none did.
+  /// The signal that asked for the stop (one of stop_signals), 0 if none did.
   int signal() const;
 
 private:
-  static constexpr int signals_[] = {SIGINT, SIGTERM, SIGHUP};
   bool active_;
   bool outermost_ = false;
-  struct sigaction previous_[3]{};
+  struct sigaction previous_[stop_signals.size()]{};
 };
 
 /// From the first instruction of a command that stops cleanly to its InterruptGuard (reading the
-/// scene, starting MPI): SIGINT, SIGTERM and SIGHUP are held as a request, which the outermost
+/// scene, starting MPI): the stop signals are held as a request, which the outermost
 /// guard then takes over instead of forgetting, so that a stop during set-up still ends the run
 /// with status 5 and a summary rather than killing it. Also takes delivery of the signals that
 /// arrived while they were blocked across the restart of pd (core/blas.hpp).

@@ -172,4 +172,11 @@ private:
 /// are applied (Simulation::force_balance, the static solver), summed exactly over the ranks.
 double full_load_norm(const Model& model);
 
+/// Why a static solve's answer is no answer, in the user's terms, as a predicate ("moves a
+/// particle …"): the largest displacement of `position` (3N, y = X + u) against the body's size and
+/// the largest bond strain, and, beyond the body's size or a strain of 1, that the loads ask for
+/// more than the elastic range holds. A static solve has no Δt, so the explicit runs' instability
+/// advice does not apply to it.
+std::string static_state_report(const Model& model, const std::vector<double>& position);
+
 } // namespace pd

@@ -1,6 +1,7 @@
 // Checks of a scene against its lattice: first from the estimate of its size alone (memory,
 // 32-bit indices, coordinates far from 0), then by counting lattice points in regions, and last,
 // for mirror supports only, by generating the particles.
+#include "libpd/discretisation/point_cloud.hpp"
 #include "libpd/io/resources.hpp"
 #include "sections.hpp"
 
@@ -158,6 +159,17 @@ void check_coordinates(const Reader& r, const ModelSpec& model, const Marks& mar
     }
   }
   for (std::size_t i = 0; i < model.bodies.size(); ++i) {
+    if (const PointCloud* cloud = model.bodies[i].points.get()) {
+      // Each particle, not the bounding box the region is made of: the message names it.
+      for (std::size_t k = 0; k < cloud->count(); ++k) {
+        for (int a = 0; a < dim; ++a) {
+          check_coordinate(r, body_box_nodes[i].front(),
+                           fmt::format("particle {} of body '{}'", k + 1, model.bodies[i].name),
+                           cloud->position[k][static_cast<std::size_t>(a)], lattice.spacing);
+        }
+      }
+      continue;
+    }
     const auto& boxes = model.bodies[i].region.boxes;
     for (std::size_t k = 0; k < boxes.size(); ++k) {
       for (int a = 0; a < dim; ++a) {
@@ -167,6 +179,46 @@ void check_coordinates(const Reader& r, const ModelSpec& model, const Marks& mar
                            lattice.spacing);
         }
       }
+    }
+  }
+}
+
+/// The most a given particle's volume may be, in cells of its size: (2h)^dim, times the thickness
+/// in 2D. A particle file's volumes tile its body, so each is about one cell; one a thousand
+/// cells large is a wrong unit or a wrong column, and at 1e300 m³ the forces V_i V_j overflow.
+constexpr double max_cells_per_particle = 1e3;
+
+/// Particle files: every particle's volume against the cell its size h gives (the file's h, or
+/// eq. 115 from its neighbours, as the model will derive it). Runs after check_coordinates, so
+/// the neighbour search never sees a particle far out.
+void check_particle_volumes(const Reader& r, const ModelSpec& model, const Marks& marks) {
+  const ModelDimension& d = model.dimension;
+  for (std::size_t i = 0; i < model.bodies.size(); ++i) {
+    const PointCloud* cloud = model.bodies[i].points.get();
+    if (cloud == nullptr) {
+      continue;
+    }
+    const std::vector<double> size =
+        cloud->size.empty()
+            ? sizes_from_neighbours(cloud->position, d.dim, model.fibre_kernel.size_neighbours)
+            : cloud->size;
+    for (std::size_t k = 0; k < cloud->count(); ++k) {
+      const double cell = cell_volume(d, 2 * size[k]);
+      if (!(cell > 0) || cloud->volume[k] <= max_cells_per_particle * cell) {
+        continue; // a lone particle has no neighbours to size it by
+      }
+      r.fail(marks.body_box_nodes[i].front(),
+             fmt::format("particle {} of body '{}' has volume {} {}, {:.3g} times the cell of its "
+                         "size h = {} m ((2h)^{}{} = {:.3g}); a particle may be at most {:g} "
+                         "cells",
+                         k + 1, model.bodies[i].name, format_number(cloud->volume[k]),
+                         d.dim == 3 ? "m³" : "m³ (with the thickness)", cloud->volume[k] / cell,
+                         format_number(size[k]), d.dim,
+                         d.dim == 3   ? ""
+                         : d.dim == 2 ? " × thickness"
+                                      : " × cross-section",
+                         cell, max_cells_per_particle),
+             "check the file's volume column and its unit (m³; in 2D area × thickness)");
     }
   }
 }
@@ -505,6 +557,7 @@ std::optional<ParticleSet> check_against_lattice(Reader& r, const Scene& scene,
   check_setup_work(r, scene, (horizon ? horizon : marks.lattice.find("spacing"))->at());
   check_resources(r, scene, marks.lattice.find("spacing")->at());
   check_coordinates(r, model, marks);
+  check_particle_volumes(r, model, marks);
   check_regions(r, model, marks);
   // Mirror supports need each image to be a free particle, and regions checked against shaped
   // bodies were only checked against the shapes' bounding boxes so far: only the lattice can
