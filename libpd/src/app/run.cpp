@@ -41,6 +41,7 @@ public:
     // while the final files are written only repeats the request. A scheduler's SIGTERM during
     // a long set-up still leaves a summary and a checkpoint.
     const InterruptGuard interrupt(options_.stop_on_interrupt);
+    interrupt_ = &interrupt;
     const auto start = std::chrono::steady_clock::now();
     claim_output();
     {
@@ -203,7 +204,8 @@ private:
     }
     split_over_ranks();
     const auto built = clock::now();
-    sim_ = std::make_unique<Simulation>(model_, scene_.solver, scene_.initial);
+    sim_ = std::make_unique<Simulation>(model_, scene_.solver, scene_.initial,
+                                        [this] { return interrupt_->requested(); });
     out_.model_seconds = std::chrono::duration<double>(built - start).count();
     out_.simulation_seconds = std::chrono::duration<double>(clock::now() - built).count();
     output_.emplace(folder_ ? &*folder_ : nullptr, options_, scene_.output, probes_);
@@ -222,14 +224,13 @@ private:
       return;
     }
     // Fixed-step ARKode only combines vectors, entry by entry: each rank's stages are the serial
-    // ones on its particles. Adaptive steps take norms of the whole state (not split yet), and
-    // the static solver factors the whole matrix.
-    if (scene_.solver.integrator == IntegratorKind::static_solve ||
-        (scene_.solver.integrator == IntegratorKind::arkode && scene_.solver.arkode.adaptive)) {
-      throw std::runtime_error(fmt::format(
-          "solver.integrator: {}{} does not run on several MPI ranks yet; use damped-euler, "
-          "euler-cromer, verlet, adr or fixed-step arkode, or run with one rank",
-          name_of(scene_.solver.integrator), scene_.solver.arkode.adaptive ? " (adaptive)" : ""));
+    // ones on its particles. Adaptive steps take norms of the whole state (not split yet). The
+    // static solver splits its matrix by rows (time/distributed_solve.hpp).
+    if (scene_.solver.integrator == IntegratorKind::arkode && scene_.solver.arkode.adaptive) {
+      throw std::runtime_error(
+          "solver.integrator: adaptive arkode does not run on several MPI ranks yet; use "
+          "damped-euler, euler-cromer, verlet, adr, fixed-step arkode or static, or run with one "
+          "rank");
     }
     const auto owner = partition_particles(model_, comm(), options_.partition);
     const PartitionQuality quality = partition_quality(model_, owner, comm().size());
@@ -632,7 +633,8 @@ private:
 
   const Scene& scene_;
   const RunOptions& options_;
-  std::optional<OutputFolder> folder_; ///< claimed first, released last (holds the lock)
+  const InterruptGuard* interrupt_ = nullptr; ///< run()'s, alive while the simulation is
+  std::optional<OutputFolder> folder_;        ///< claimed first, released last (holds the lock)
   std::size_t evaluations_restored_ = 0;
   Model model_;
   std::unique_ptr<Simulation> sim_; ///< refers to model_, so made after it

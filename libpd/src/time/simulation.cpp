@@ -20,7 +20,8 @@ std::string to_string(RunStatus status) {
   return std::string(name_of(status));
 }
 
-Simulation::Simulation(Model& model, const SolverSpec& solver, const InitialSpec& initial)
+Simulation::Simulation(Model& model, const SolverSpec& solver, const InitialSpec& initial,
+                       std::function<bool()> stop_requested)
     : model_(model), solver_(solver) {
   const std::size_t n = model.size();
   state_.position.resize(3 * n);
@@ -57,6 +58,7 @@ Simulation::Simulation(Model& model, const SolverSpec& solver, const InitialSpec
   is.arkode = solver.arkode;
   is.cfl_fraction = solver.safety;
   is.force_tolerance = solver.steady.force_tolerance;
+  is.stop_requested = std::move(stop_requested);
   if (solver.integrator == IntegratorKind::arkode) {
     // Adaptive ARKode: ERKStepSetStabilityFn gets the eq. 31 step scaled by the table's β/2.
     is.stable_dt = dt_stable_ * make_integrator(is, model, *forces_)->stability_scale();

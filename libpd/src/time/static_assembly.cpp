@@ -16,8 +16,10 @@
 // row about ten times denser than the bonds, and what the assembly spends its time on.
 #include "static_assembly.hpp"
 
+#include "libpd/core/exact_sum.hpp"
 #include "libpd/kernel/linear_operator.hpp"
 
+#include <Eigen/SparseCore>
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -430,6 +432,28 @@ StaticSystem assemble_reduced(const Model& m, const DofMap& d, RowPart part) {
   return s;
 }
 
+void StaticSystem::multiply(const double* x, double* y) const {
+  for (std::size_t r = 0; r < size(); ++r) {
+    double sum = 0;
+    for (auto q = static_cast<std::size_t>(row_offsets[r]);
+         q < static_cast<std::size_t>(row_offsets[r + 1]); ++q) {
+      sum += values[q] * x[columns[q]];
+    }
+    y[r] = sum;
+  }
+}
+
+double StaticSystem::asymmetry() const {
+  // ‖K − Kᵀ‖_F / ‖K‖_F with Eigen's transpose of the row-major view (a sorted merge, no search).
+  const auto n = static_cast<Eigen::Index>(size());
+  const Eigen::Map<const Eigen::SparseMatrix<double, Eigen::RowMajor, int>> k(
+      n, n, static_cast<Eigen::Index>(values.size()), row_offsets.data(), columns.data(),
+      values.data());
+  const Eigen::SparseMatrix<double, Eigen::RowMajor, int> kt = k.transpose();
+  const double norm = k.norm();
+  return norm > 0 ? (k - kt).norm() / norm : 0.0;
+}
+
 double bond_asymmetry(const Model& m) {
   // Each pair of bonds once (from its lower end), the reverse found by binary search in the
   // neighbour's sorted row; a bond without its reverse counts in full.
@@ -439,10 +463,19 @@ double bond_asymmetry(const Model& m) {
     const bool broken = !m.state.broken.empty() && m.state.broken[k];
     return broken ? 0.0 : volume[from] * bond_stiffness(m, k) * f.inverse_length[k];
   };
+  // On a split model, the pairs of owned particles (a halo particle's row may be incomplete),
+  // summed over the ranks: every pair but those the partition cuts.
+  const Ownership& own = m.ownership;
   double diff = 0, norm = 0;
   for (std::size_t i = 0; i < m.size(); ++i) {
+    if (!own.owns(i)) {
+      continue;
+    }
     for (std::size_t k = f.offsets[i]; k < f.offsets[i + 1]; ++k) {
       const std::size_t j = f.neighbour[k];
+      if (!own.owns(j)) {
+        continue;
+      }
       const double vk = stiffness(i, k);
       norm += vk * vk;
       const auto row_begin = f.neighbour.begin() + static_cast<std::ptrdiff_t>(f.offsets[j]);
@@ -455,6 +488,14 @@ double bond_asymmetry(const Model& m) {
         diff += 2 * (vk - vk_back) * (vk - vk_back);
       }
     }
+  }
+  if (own.partial()) {
+    std::array<ExactSum, 2> sums;
+    sums[0].add(diff);
+    sums[1].add(norm);
+    own.communicator().sum(sums);
+    diff = sums[0].value();
+    norm = sums[1].value();
   }
   return norm > 0 ? std::sqrt(diff / norm) : 0.0;
 }

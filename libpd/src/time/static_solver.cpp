@@ -47,6 +47,7 @@
 // one event then broke all 134,557 concrete bonds at 0.25 mm, where ADR breaks 5,300.
 #include "libpd/time/static_solver.hpp"
 
+#include "distributed_solve.hpp"
 #include "libpd/core/binary_state.hpp"
 #include "libpd/core/blas.hpp"
 #include "libpd/kernel/force_kernel.hpp"
@@ -63,6 +64,7 @@
 #include <chrono>
 #include <cmath>
 #include <fmt/format.h>
+#include <functional>
 #include <limits>
 #include <stdexcept>
 #include <vector>
@@ -97,30 +99,30 @@ struct CgResult {
 template <typename Apply, typename Precondition>
 CgResult preconditioned_cg(const Apply& apply, const Precondition& precondition,
                            const Eigen::VectorXd& b, double relative_tolerance,
-                           std::size_t max_iterations) {
+                           std::size_t max_iterations, const UnknownReductions& on) {
   CgResult out{Eigen::VectorXd::Zero(b.size()), 0};
   Eigen::VectorXd res = b, z = precondition(res), p = z;
-  double rz = res.dot(z);
-  const double stop = relative_tolerance * b.norm();
-  while (out.iterations < max_iterations && res.norm() > stop) {
+  double rz = on.dot(res, z);
+  const double stop = relative_tolerance * on.norm(b);
+  while (out.iterations < max_iterations && on.norm(res) > stop) {
     const Eigen::VectorXd q = apply(p);
     ++out.iterations;
-    const double pq = p.dot(q);
+    const double pq = on.dot(p, q);
     if (!(pq > 0)) {
       break;
     }
     const double alpha = rz / pq;
     out.x += alpha * p;
     res -= alpha * q;
-    if (res.norm() <= stop) {
+    if (on.norm(res) <= stop) {
       break; // converged: the next direction (one more preconditioner solve) is not needed
     }
     z = precondition(res);
-    const double rz_next = res.dot(z);
+    const double rz_next = on.dot(res, z);
     p = z + (rz_next / rz) * p;
     rz = rz_next;
   }
-  out.converged = res.norm() <= stop;
+  out.converged = on.norm(res) <= stop;
   return out;
 }
 
@@ -156,12 +158,19 @@ private:
 class StaticSolver final : public Integrator {
 public:
   StaticSolver(const IntegratorSettings& settings, Model& model, ForceEvaluator& forces)
-      : model_(model), forces_(forces),
+      : model_(model), forces_(forces), stop_(settings.stop_requested),
         tolerance_(settings.force_tolerance > 0 ? settings.force_tolerance : acceptable_residual) {
     if (model.effects.plasticity) {
       throw std::invalid_argument(
           "solver.integrator: static solves elastic and damaged bodies only (no plasticity yet): "
           "use adr or damped-euler for this scene");
+    }
+    // Split over ranks (distributed_solve.hpp): a supported elastic body. Break events and the
+    // rigid-motion pins of a free body are chosen over the whole model, which no rank holds.
+    if (model.ownership.partial() && (model.effects.damage || model.spec.supports.empty())) {
+      throw std::invalid_argument(
+          "solver.integrator: static on several MPI ranks solves supported elastic bodies only "
+          "(no damage, at least one support): run this scene with one rank");
     }
   }
 
@@ -170,7 +179,11 @@ public:
   StepReport step(State& st, double dt) override {
     ++calls_;
     const auto t0 = std::chrono::steady_clock::now();
-    solve(st);
+    try {
+      solve(st);
+    } catch (const StopRequested&) {
+      return displacement_report(model_, st.position.data()); // not finished: the run stops
+    }
     std::size_t events = 0, converged_solves = newton_converged_ ? 1 : 0;
     if (model_.effects.damage) {
       const auto broken = [&] {
@@ -221,7 +234,7 @@ private:
     /// particle refitted within preconditioner_fit_radius (then rhs is P's, not K's).
     bool exact = true;
     double asymmetry = 0;
-    std::size_t nonzeros = 0;
+    std::size_t nonzeros = 0, unknowns = 0; ///< of the whole model (over the ranks)
     /// The dofs held to remove a free body's rigid motion (rigid_motion_pins), or none.
     std::vector<std::size_t> pins;
     double check_seconds = 0, assembly_seconds = 0, factorisation_seconds = 0;
@@ -239,13 +252,14 @@ private:
     // like K (any A gives a positive semi-definite Aᵀ (V K) A, and the body's bonds and supports
     // make it definite), and close to K in energy, so that conjugate gradients on K converge in a
     // few iterations with P as preconditioner (solve). K itself is applied matrix-free.
+    const bool split = model_.ownership.partial();
     f.pins = rigid_motion_pins(model_);
     if (!f.pins.empty()) {
       require_balanced_loads();
     }
     f.dofs = map_dofs(model_);
-    if (allow_preconditioner && !model_.extrapolated.empty() && f.dofs.every_dependant_folds() &&
-        f.dofs.free_dofs.size() >= preconditioned_from_unknowns) {
+    if (allow_preconditioner && !split && !model_.extrapolated.empty() &&
+        f.dofs.every_dependant_folds() && f.dofs.free_dofs.size() >= preconditioned_from_unknowns) {
       f.dofs = map_dofs(model_, refit_extrapolation(model_, preconditioner_fit_radius));
       f.exact = false;
     }
@@ -260,6 +274,13 @@ private:
     f.folds = d.every_dependant_folds();
     f.asymmetry = f.folds ? bond_asymmetry(model_) : 0.0;
     f.symmetric = f.folds && f.asymmetry <= 1e-12;
+    if (split && !model_.ownership.communicator().any(!f.symmetric)) {
+      return distributed_system(std::move(f), t0);
+    }
+    if (split) {
+      throw std::runtime_error("solver.integrator: static on several MPI ranks needs a symmetric "
+                               "stiffness (mirror_coupling other than copy): run with one rank");
+    }
     if (!f.exact && !f.symmetric) { // V K itself is not symmetric: K, for UMFPACK
       f.dofs = map_dofs(model_);
       pin_dofs(f.dofs, f.pins);
@@ -274,6 +295,7 @@ private:
     const auto t1 = clock::now();
     // Entries of the whole matrix: the upper triangle's off-diagonal ones count twice.
     f.nonzeros = system.values.size();
+    f.unknowns = d.free_dofs.size();
     if (f.symmetric) {
       std::size_t diagonal = 0;
       for (std::size_t r = 0; r < system.size(); ++r) {
@@ -304,6 +326,33 @@ private:
     f.check_seconds = s(t0, t_check);
     f.assembly_seconds = s(t_check, t1);
     f.factorisation_seconds = s(t1, t2);
+    return f;
+  }
+
+  /// factor_system on a split model: each rank assembles its owned rows (distributed_solve.hpp).
+  Factored distributed_system(Factored f, std::chrono::steady_clock::time_point t0) const {
+    using clock = std::chrono::steady_clock;
+    const auto t_check = clock::now();
+    const StaticSystem system = assemble_reduced(model_, f.dofs, RowPart::full);
+    const auto t1 = clock::now();
+    f.rhs = Eigen::Map<const Eigen::VectorXd>(system.rhs.data(),
+                                              static_cast<Eigen::Index>(system.size()));
+    f.factor = distributed_solver(model_, f.dofs, system, distributed_tolerance, stop_);
+    std::uint64_t owned_rows = 0, owned_entries = 0;
+    for (std::size_t k = 0; k < system.size(); ++k) {
+      if (model_.ownership.owns(f.dofs.free_dofs[k] / 3)) {
+        ++owned_rows;
+        owned_entries +=
+            static_cast<std::uint64_t>(system.row_offsets[k + 1] - system.row_offsets[k]);
+      }
+    }
+    const Communicator& comm = model_.ownership.communicator();
+    f.unknowns = comm.sum(owned_rows);
+    f.nonzeros = comm.sum(owned_entries);
+    const auto s = [](auto a, auto b) { return std::chrono::duration<double>(b - a).count(); };
+    f.check_seconds = s(t0, t_check);
+    f.assembly_seconds = s(t_check, t1);
+    f.factorisation_seconds = s(t1, clock::now()); // PETSc's set-up: GAMG's hierarchy
     return f;
   }
 
@@ -344,6 +393,7 @@ private:
     const auto n = static_cast<Eigen::Index>(d.free_dofs.size());
     const std::vector<double>& ext = model_.external_force_density;
     const auto t2 = clock::now();
+    const UnknownReductions on(model_, d);
 
     // Linear solution, then Newton on the force kernel's residual.
     const LoadRamp full;
@@ -409,7 +459,7 @@ private:
     for (;; ++iterations) {
       const Eigen::VectorXd r = residual_at(y);
       const double force_reference = applied > 0 ? applied : reactions_norm(st.force, held);
-      residual = r.norm() / force_reference;
+      residual = on.norm(r) / force_reference;
       floor = floor_force / force_reference;
       acceptable = std::max(tolerance_, round_off_margin * floor);
       const double target = std::max(0.1 * tolerance_, round_off_margin * floor);
@@ -434,7 +484,7 @@ private:
       }
       previous = residual;
       before.assign(y, y + st.position.size());
-      place(f.symmetric ? newton_step(r, y, d, factor, residual_at) : factor.solve(r));
+      place(f.symmetric ? newton_step(r, y, d, factor, residual_at, on) : factor.solve(r));
     }
     std::fill(st.velocity.begin(), st.velocity.end(), 0.0);
     const auto t3 = clock::now();
@@ -563,7 +613,7 @@ private:
     j["blas_kernels"] = openblas_core(); // OpenBLAS's; "" for another BLAS
     j["symmetric"] = f.symmetric;
     j["asymmetry"] = f.asymmetry;
-    j["unknowns"] = f.dofs.free_dofs.size();
+    j["unknowns"] = f.unknowns;
     j["nonzeros"] = f.nonzeros;
     j["factor_nonzeros"] = factor.factor_nonzeros();
     j["factor_bytes"] = factor.factor_bytes();
@@ -589,12 +639,11 @@ private:
         "assembly {:.3f} s, symmetry check {:.3f} s, factorisation {:.3f} s "
         "(analysis {:.3f} s; factor {} nonzeros, {:.1f} MiB), {} Newton iterations "
         "{:.3f} s, residual {:.2e} of the load or reactions (round-off floor {:.1e}){}",
-        f.dofs.free_dofs.size(), f.nonzeros, factor.name(),
-        f.symmetric ? "symmetric" : "nonsymmetric", f.folds ? "‖VK−(VK)ᵀ‖/‖VK‖" : "‖K−Kᵀ‖/‖K‖",
-        f.asymmetry, f.assembly_seconds, f.check_seconds, f.factorisation_seconds,
-        factor.analysis_seconds(), factor.factor_nonzeros(),
-        static_cast<double>(factor.factor_bytes()) / (1024.0 * 1024.0), iterations, newton_seconds,
-        residual, floor,
+        f.unknowns, f.nonzeros, factor.name(), f.symmetric ? "symmetric" : "nonsymmetric",
+        f.folds ? "‖VK−(VK)ᵀ‖/‖VK‖" : "‖K−Kᵀ‖/‖K‖", f.asymmetry, f.assembly_seconds,
+        f.check_seconds, f.factorisation_seconds, factor.analysis_seconds(),
+        factor.factor_nonzeros(), static_cast<double>(factor.factor_bytes()) / (1024.0 * 1024.0),
+        iterations, newton_seconds, residual, floor,
         f.pins.empty() ? "" : "; no support: a free body, its mean rigid motion removed");
   }
 
@@ -638,8 +687,8 @@ private:
       return out;
     };
     const auto precondition = [&](const Eigen::VectorXd& v) { return f.factor->solve(v); };
-    CgResult cg =
-        preconditioned_cg(apply, precondition, rhs, linear_tolerance, max_linear_iterations_with_p);
+    CgResult cg = preconditioned_cg(apply, precondition, rhs, linear_tolerance,
+                                    max_linear_iterations_with_p, UnknownReductions(model_, d));
     linear_iterations_ = cg.iterations;
     return cg;
   }
@@ -654,15 +703,18 @@ private:
   /// distinct eigenvalues, which holds when J differs from K by a few modes.
   template <typename Residual>
   Eigen::VectorXd newton_step(const Eigen::VectorXd& r, const double* y, const DofMap& d,
-                              const SparseFactorisation& factor, const Residual& residual_at) {
+                              const SparseFactorisation& factor, const Residual& residual_at,
+                              const UnknownReductions& on) {
     const auto n = r.size();
     std::vector<double> yp(y, y + 3 * model_.size()), ym = yp;
     const LoadRamp full;
     // J v = −(r(y + h v) − r(y − h v)) / 2h, h so that the largest move is 1e-5 λ: central
     // differences are then exact to ~1e-10 and the positions' round-off stays below 1e-9.
     auto tangent = [&](const Eigen::VectorXd& v) {
-      const double h =
-          1e-5 * model_.spec.lattice.spacing / std::max(v.lpNorm<Eigen::Infinity>(), 1e-300);
+      const double largest = model_.ownership.partial()
+                                 ? model_.ownership.communicator().max(v.lpNorm<Eigen::Infinity>())
+                                 : v.lpNorm<Eigen::Infinity>();
+      const double h = 1e-5 * model_.spec.lattice.spacing / std::max(largest, 1e-300);
       for (Eigen::Index k = 0; k < n; ++k) {
         const std::size_t g = d.free_dofs[static_cast<std::size_t>(k)];
         yp[g] = y[g] + h * v[k];
@@ -675,10 +727,10 @@ private:
     };
     // CG to a relative residual of 1e-3 (Newton stays quadratic down to that factor per step).
     const auto precondition = [&](const Eigen::VectorXd& v) { return factor.solve(v); };
-    const CgResult cg = preconditioned_cg(tangent, precondition, r, 1e-3, max_cg_iterations);
+    const CgResult cg = preconditioned_cg(tangent, precondition, r, 1e-3, max_cg_iterations, on);
     cg_iterations_ += cg.iterations;
     // Not positive along the first direction: the modified Newton step K⁻¹ r.
-    return cg.x.isZero() ? precondition(r) : cg.x;
+    return on.is_zero(cg.x) ? precondition(r) : cg.x;
   }
 
   static constexpr std::size_t max_cg_iterations = 50;
@@ -711,9 +763,15 @@ private:
   /// round_off_margin × the round-off floor where that is higher (kernel/round_off.hpp).
   static constexpr double acceptable_residual = 1e-6;
   static constexpr std::size_t max_newton_iterations = 50;
+  /// The distributed solve's relative residual (distributed_solve.hpp): it stands for the
+  /// factor, as the linear solution and as the preconditioner of Newton's CG, so it is solved
+  /// far below what Newton needs, until it is as good as an exact solve to the 1e-8 the ranks
+  /// are held to against one process.
+  static constexpr double distributed_tolerance = 1e-10;
 
   Model& model_;
   ForceEvaluator& forces_;
+  std::function<bool()> stop_;
   double tolerance_;
   bool solved_ = false;
   bool newton_converged_ = false;
@@ -725,28 +783,6 @@ private:
 };
 
 } // namespace
-
-void StaticSystem::multiply(const double* x, double* y) const {
-  for (std::size_t r = 0; r < size(); ++r) {
-    double sum = 0;
-    for (auto q = static_cast<std::size_t>(row_offsets[r]);
-         q < static_cast<std::size_t>(row_offsets[r + 1]); ++q) {
-      sum += values[q] * x[columns[q]];
-    }
-    y[r] = sum;
-  }
-}
-
-double StaticSystem::asymmetry() const {
-  // ‖K − Kᵀ‖_F / ‖K‖_F with Eigen's transpose of the row-major view (a sorted merge, no search).
-  const auto n = static_cast<Eigen::Index>(size());
-  const Eigen::Map<const Eigen::SparseMatrix<double, Eigen::RowMajor, int>> k(
-      n, n, static_cast<Eigen::Index>(values.size()), row_offsets.data(), columns.data(),
-      values.data());
-  const Eigen::SparseMatrix<double, Eigen::RowMajor, int> kt = k.transpose();
-  const double norm = k.norm();
-  return norm > 0 ? (k - kt).norm() / norm : 0.0;
-}
 
 StaticSystem assemble_static_system(const Model& model) {
   return assemble_reduced(model, map_dofs(model), RowPart::full);

@@ -23,6 +23,7 @@
 #include "libpd/kernel/force_kernel.hpp"
 
 #include <cstddef>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -193,6 +194,9 @@ struct IntegratorSettings {
   /// static: the residual, relative to the load, the solve must reach (the scene's
   /// solver.steady.force_tolerance, which dynamic relaxation is held to); 0: the solver's own.
   double force_tolerance = 0;
+  /// static on several ranks: polled at every iteration of the distributed linear solve; true
+  /// ends the step early (the run then stops as interrupted). Empty: never.
+  std::function<bool()> stop_requested;
 };
 
 /// Throws std::invalid_argument for combinations that cannot run (arkode without SUNDIALS, with

@@ -94,7 +94,9 @@ struct RunResult {
 
 class Simulation {
 public:
-  Simulation(Model& model, const SolverSpec& solver, const InitialSpec& initial = {});
+  /// `stop_requested`: polled inside a step that can take long (IntegratorSettings).
+  Simulation(Model& model, const SolverSpec& solver, const InitialSpec& initial = {},
+             std::function<bool()> stop_requested = {});
 
   /// Observer called after every step with the current state; return false to stop the run
   /// (status `interrupted`).
