@@ -60,6 +60,7 @@ from pdreport import cases as case_files  # noqa: E402
 from pdreport import compare as cmp  # noqa: E402
 from pdreport import stages as S  # noqa: E402
 from pdreport import timing  # noqa: E402
+from pdreport.threads_under_load import threads_under_load_stage  # noqa: E402
 
 ROOT = HERE.parent
 
@@ -120,7 +121,7 @@ def build_stages(ctx: S.Ctx, records: dict[str, dict]) -> list[S.Stage]:
     if ctx.full:  # LAMMPS's own thread scan; `peer` measures the ratio in every report
         stages.append(S.lammps_stage(ctx))
     stages.append(S.fibre_bench_stage(ctx))
-    stages.append(S.threads_under_load_stage(ctx))
+    stages.append(threads_under_load_stage(ctx))
     stages.append(S.mpi_stage(ctx))
     return stages
 

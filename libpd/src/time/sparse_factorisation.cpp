@@ -177,9 +177,10 @@ public:
     // The BLAS runs on one thread, whatever the factor's size. OpenBLAS splits a dense block's
     // work by its thread count, so a factor made with 2 BLAS threads differed from the 1-thread
     // factor in the last bits, and so did every result solved with it. And each supernode is a
-    // short parallel region whose threads mostly wait: on a busy 2-core machine (2 competing
-    // processes beside the other load) the plate's factorisation (32.9 M entries) took 14-21 s
-    // with 2 BLAS threads against 7-10 s with 1, the clamped beam's (9.6 M) 9.5 s against 4.9 s.
+    // short parallel region whose threads mostly wait: on a 2-core machine beside two busy
+    // processes (and other load, 3.5-12) the plate's factorisation (32.9 M entries) took 14-21 s
+    // with 2 BLAS threads against 7-10 s with 1; the clamped beam's (9.6 M), at load 11-14, 9.5 s
+    // against 4.9 s.
     const SerialBlas serial;
     if (!cholmod_factorize(&A, factor_, &common) || common.status != CHOLMOD_OK ||
         factor_->minor < factor_->n) {
