@@ -19,6 +19,8 @@ Stages (each cached under DIR/cache/ by a hash of its inputs; see reports/README
   peer         `pd bench model-a-benchmark.yaml --lammps lmp --json`: libpd/LAMMPS alternated.
   lammps       `bash reports/lammps/run_lammps_bench.sh`.
   fibre-bench  `pd bench SCENE --bond-model M --json`: the virtual-fibre and bond-based kernels alternated.
+  threads-under-load  the clamped beam, the plate and Model A on the default threads and on one,
+               beside one busy process per core (started and killed by the stage).
 Output: DIR/index.html, DIR/*.png, DIR/report.json, DIR/data/*.json (stage records).
 Exit code: 0 all stages ran and all gates passed, 2 a verification gate failed, 1 a stage failed.
 """
@@ -58,6 +60,7 @@ from pdreport import cases as case_files  # noqa: E402
 from pdreport import compare as cmp  # noqa: E402
 from pdreport import stages as S  # noqa: E402
 from pdreport import timing  # noqa: E402
+from pdreport.threads_under_load import threads_under_load_stage  # noqa: E402
 
 ROOT = HERE.parent
 
@@ -118,6 +121,7 @@ def build_stages(ctx: S.Ctx, records: dict[str, dict]) -> list[S.Stage]:
     if ctx.full:  # LAMMPS's own thread scan; `peer` measures the ratio in every report
         stages.append(S.lammps_stage(ctx))
     stages.append(S.fibre_bench_stage(ctx))
+    stages.append(threads_under_load_stage(ctx))
     stages.append(S.mpi_stage(ctx))
     return stages
 

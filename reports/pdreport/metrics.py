@@ -123,6 +123,14 @@ def _performance(m: _Metrics, records: dict[str, dict]) -> None:
         for r in rec["result"]["runs"]:
             key = f"peer.{r['stretch']}{'.damage' if r['damage'] else ''}"
             m.add(key + ".ratio_to_lammps", r.get("ratio_to_lammps"), "rate")
+    rec = records.get("threads-under-load")
+    if R.ok(rec):
+        for r in rec["result"]["scenes"]:
+            key = "threads_under_load." + r["scene"].rsplit("/", 1)[-1].removesuffix(".yaml")
+            # A ratio of two times on one machine: compared like a time, with 0.1 for its noise.
+            m.add(key + ".ratio", r.get("ratio"), "time", abs_tol=0.1)
+            if r.get("identical") is not None:
+                m.add(key + ".bitwise_across_threads", r["identical"], "gate")
     rec = records.get("lammps")
     if R.ok(rec):
         for t, r in sorted(rec["result"].get("threads", {}).items()):

@@ -54,6 +54,8 @@ def section(page: Page) -> str:
     parts.append(kernel_block(page))
     parts.append("<h3>libpd / LAMMPS peri/pmb, alternated in one run (Model A, 1 thread)</h3>")
     parts.append(peer_block(page))
+    parts.append("<h3>Default threads against one thread beside a competing load</h3>")
+    parts.append(threads_under_load_block(page))
     parts.append("<h3>LAMMPS peri/pmb beside libpd (Model A, 1 thread)</h3>")
     parts.append(lammps_block(page, libpd_1t))
     parts.append("<h3>Bonds per particle (infinite lattice) beside Miranda Table 1</h3>")
@@ -74,6 +76,39 @@ def load_note(run: dict) -> str:
     if run.get("under_load"):
         return f'<span class="fail">under load: others took {text}</span>'
     return esc(text)
+
+
+# Issue 41: beside a busy process per core the default threads take at most this × one thread's time.
+THREADS_UNDER_LOAD_TARGET = 1.1
+
+
+def threads_under_load_block(page: Page) -> str:
+    rec = page.rec.get("threads-under-load")
+    if not R.ok(rec):
+        return failed_box(rec, "the threads-under-load stage")
+    res = rec["result"]
+    rows = []
+    for r in res["scenes"]:
+        ratio = r["ratio"]
+        met = ratio <= THREADS_UNDER_LOAD_TARGET
+        same = r.get("identical")
+        rows.append([esc(r["label"]), num_td(fnum(r["default_median"], 3)),
+                     num_td(fnum(r["one_thread_median"], 3)), num_td(f"{ratio:.2f}×"),
+                     num_td(f"≤ {THREADS_UNDER_LOAD_TARGET:g}×"),
+                     '<span class="pass">met</span>' if met else '<span class="fail">not met</span>',
+                     "–" if same is None else ('<span class="pass">bitwise</span>' if same
+                                              else '<span class="fail">differ</span>')])
+    return (f'<p class="note">The stage starts {res["busy_processes"]} busy processes (one per core), '
+            f'runs each case {res["rounds"]} times with pd\'s default threads and with '
+            "<code>--threads 1</code>, alternating which goes first, and kills the busy processes. "
+            "Times are medians: the whole <code>pd run</code> for the static scenes, the "
+            "<code>pd bench</code> median for Model A; the ratio is the median of the rounds' "
+            "ratios, each of two runs under the same load. A policy that spins or oversubscribes shows "
+            "here as a ratio above the target. The probes of the static runs must be bitwise the "
+            "same for both thread counts. Load averages per round: "
+            f'{esc(", ".join(res.get("loadavg", [])))}.</p>' +
+            table(["case", "default threads (s)", "1 thread (s)", "default / 1 thread", "target", "",
+                   "probes, default vs 1 thread"], rows, 'id="threads-under-load-table"'))
 
 
 def peer_block(page: Page) -> str:

@@ -159,6 +159,17 @@ def tool_records() -> list[dict]:
                for n, ms in (("HandWrittenElastic", 6.0), ("Dispatched/elastic_exact", 6.1),
                              ("Dispatched/elastic_fast", 5.0), ("Dispatched/damage_exact", 7.2))]
     out.append(rec("kernel", "kernel", {"context": {"num_cpus": 2}, "benchmarks": benches}))
+    under_load = []
+    for label, scene, default, one, same in (
+            ("clamped beam (static)", "verification/cases/clamped-beam/clamped-beam.yaml", 4.1, 4.4, True),
+            ("plate (static)", "verification/cases/plate-3clamped/plate-3clamped.yaml", 31.0, 26.0, False),
+            ("Model A (300 force evaluations)", "verification/scenes/model-a-benchmark.yaml", 0.31, 0.67, None)):
+        under_load.append({"label": label, "scene": scene, "default_seconds": [default] * 3,
+                           "one_thread_seconds": [one] * 3, "default_median": default,
+                           "one_thread_median": one, "ratio": default / one, "default_threads": None,
+                           "identical": same})
+    out.append(rec("threads-under-load", "bench", {"rounds": 3, "busy_processes": 2, "scenes": under_load,
+                                                   "loadavg": ["['2.1', '1.0', '0.5']"] * 4}))
     out.append(rec("lammps", "lammps", None, status="failed", seconds=0.1,
                    error="synthetic: reports/lammps/run_lammps_bench.sh exited with code 127 "
                          "(LAMMPS binary 'lmp' not found) — the failed-stage box is part of the test"))

@@ -148,9 +148,6 @@ std::vector<int> group_ordering(const SparseMatrix& K, const std::vector<std::si
   return order;
 }
 
-/// Factor entries from which CHOLMOD's BLAS runs on the threads OpenMP has (below, on one).
-constexpr std::size_t threaded_blas_entries = 20'000'000;
-
 /// CHOLMOD supernodal K = L Lᵀ, called directly (Eigen's wrapper chooses the ordering itself).
 class Cholmod final : public SparseFactorisation {
 public:
@@ -177,16 +174,14 @@ public:
     // The symbolic analysis knows the factor's size: refuse a factor the machine cannot hold
     // before the numeric factorisation runs into the OOM killer.
     check_fits(static_cast<double>(factor_bytes()));
-    // A small factor runs its BLAS on one thread. Its supernodes are small and many, so each
-    // BLAS call is a short parallel region whose threads mostly wait, and on a busy machine
-    // waiting for a descheduled thread cost more than the second thread gave: the clamped beam
-    // (9.6 M factor entries, 2 cores, load 11–14, passive waiting) took 9.5 s with 2 BLAS
-    // threads against 4.9 s with 1, while the plate (32.9 M) stayed faster with 2. The threshold
-    // lies between the two; what a small factor loses on a quiet machine is not measured yet.
-    std::optional<SerialBlas> serial;
-    if (factor_nonzeros() < threaded_blas_entries) {
-      serial.emplace();
-    }
+    // The BLAS runs on one thread, whatever the factor's size. OpenBLAS splits a dense block's
+    // work by its thread count, so a factor made with 2 BLAS threads differed from the 1-thread
+    // factor in the last bits, and so did every result solved with it. And each supernode is a
+    // short parallel region whose threads mostly wait: on a 2-core machine beside two busy
+    // processes (and other load, 3.5-12) the plate's factorisation (32.9 M entries) took 14-21 s
+    // with 2 BLAS threads against 7-10 s with 1; the clamped beam's (9.6 M), at load 11-14, 9.5 s
+    // against 4.9 s.
+    const SerialBlas serial;
     if (!cholmod_factorize(&A, factor_, &common) || common.status != CHOLMOD_OK ||
         factor_->minor < factor_->n) {
       singular("the Cholesky factorisation (CHOLMOD)");
@@ -203,6 +198,7 @@ public:
     rhs.xtype = CHOLMOD_REAL;
     rhs.dtype = CHOLMOD_DOUBLE;
     cholmod_common& common = workspace_.get();
+    const SerialBlas serial; // the triangular solves too: bitwise for any thread count
     cholmod_dense* x = cholmod_solve(CHOLMOD_A, factor_, &rhs, &common);
     if (x == nullptr) {
       throw std::runtime_error("static solve: CHOLMOD's triangular solves failed");

@@ -41,7 +41,7 @@ void restart_with_process_settings(char** argv);
 /// disks of elliptic-disk and elliptic-disk-regular differed at 4e-6 and the Griffith failure
 /// stresses by up to 7 % between 1 and 2 threads. The fibre arms' balance and relaxation
 /// (discretisation/fibre_arms.cpp, fibre_relaxation.cpp) factor once per set-up, so they hold
-/// one of these.
+/// one of these, and so does every CHOLMOD factorisation and solve (time/sparse_factorisation.cpp).
 class SerialBlas {
 public:
   SerialBlas();
