@@ -653,6 +653,13 @@ Model build_model(const ModelSpec& spec, ParticleSet particles) {
   const int dim = spec.dimension.dim;
   const double delta = spec.lattice.horizon();
   m.particles = std::move(particles);
+  // Under the bond-based model a mesh body's particles take the lattice's horizon, like lattice
+  // particles; only the virtual-fibre model gives particles horizons of their own.
+  if (spec.effects.bond_model != BondModel::virtual_fibres &&
+      std::all_of(spec.bodies.begin(), spec.bodies.end(),
+                  [](const BodySpec& b) { return !b.points || b.mesh; })) {
+    m.particles.particle_size.clear();
+  }
   const std::size_t body_count = m.particles.size();
   if (body_count == 0) {
     throw std::runtime_error("the bodies contain no lattice particle");

@@ -60,6 +60,9 @@ struct BodySpec {
   int material = 0;
   /// A body of given particles (a particle file) instead of the lattice points of `region`.
   std::shared_ptr<const PointCloud> points;
+  /// `points` are a mesh's elements (io/mesh_file.hpp): under the bond-based model they take the
+  /// lattice's horizon, as lattice particles do, instead of one of their own.
+  bool mesh = false;
 
   bool operator==(const BodySpec&) const = default;
 };

@@ -85,7 +85,7 @@ void check_bond_model(Reader& r, const Scene& scene, const Marks& marks) {
   const ModelSpec& model = scene.model;
   if (model.effects.bond_model != BondModel::virtual_fibres) {
     for (std::size_t i = 0; i < model.bodies.size(); ++i) {
-      if (model.bodies[i].points) {
+      if (model.bodies[i].points && !model.bodies[i].mesh) {
         r.fail(marks.body_box_nodes.at(i).front(),
                fmt::format("body '{}' is given as particles, which only the virtual-fibre model "
                            "runs (each particle its own size and horizon)",
