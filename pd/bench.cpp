@@ -238,7 +238,7 @@ Command add_bench_command(CLI::App& app) {
       ->check(CLI::IsMember(enum_word_list<BondModel>()));
   add_lammps_options(*cmd, *a);
   cmd->add_flag("--json", a->json, "machine-readable output");
-  return {cmd, [a] { return bench(*a); }};
+  return {cmd, [a] { return bench(*a); }, true};
 }
 
 } // namespace pd::cli

@@ -34,6 +34,9 @@ private:
 struct Command {
   CLI::App* app = nullptr;
   std::function<int()> run;
+  /// Whether a stop request ends it cleanly (exit 5): then one during its set-up is held for it
+  /// (hold_stop_requests), else the signal acts as usual.
+  bool stops_cleanly = false;
 };
 
 /// OpenMP threads for this process; 0 keeps the default (all). More threads than the machine

@@ -75,7 +75,7 @@ Command add_compare_command(CLI::App& app) {
                 "dynamic: one period and a coarser reference; quasistatic: twice the spacing, "
                 "no adaptive Dormand–Prince");
   add_threads_option(*cmd, a->threads);
-  return {cmd, [a] { return compare(*a); }};
+  return {cmd, [a] { return compare(*a); }, true};
 }
 
 } // namespace pd::cli

@@ -14,11 +14,13 @@
 // Exit codes: 0 success, 1 bad input or usage, 2 a verification gate failed, 3 the run became
 // unstable, 4 a stability gate failed, 5 the run was interrupted (Ctrl-C, SIGTERM, SIGHUP).
 #include "commands.hpp"
+#include "libpd/app/interrupt.hpp"
 #include "libpd/core/blas.hpp"
 #include "libpd/core/communicator.hpp"
 #include "libpd/core/text.hpp"
 
 #include <algorithm>
+#include <csignal>
 #include <cstdlib>
 #include <fmt/format.h>
 #include <string_view>
@@ -26,6 +28,22 @@
 #include <vector>
 
 namespace {
+/// Before the libraries' initialisers (OpenMPI's, OpenBLAS's take most of pd's first tenth of a
+/// second): SIGINT, SIGTERM and SIGHUP are blocked, not lost and not fatal, until main holds them
+/// as a stop request (pd::hold_stop_requests). Threads those initialisers start keep them
+/// blocked, so a signal always reaches a thread that takes it.
+void block_stop_signals(int /*argc*/, char** /*argv*/, char** /*envp*/) {
+  sigset_t stop;
+  sigemptyset(&stop);
+  sigaddset(&stop, SIGINT);
+  sigaddset(&stop, SIGTERM);
+  sigaddset(&stop, SIGHUP);
+  sigprocmask(SIG_BLOCK, &stop, nullptr);
+}
+// NOLINTNEXTLINE: the ELF hook that runs before every shared library's initialiser.
+[[gnu::section(".preinit_array"),
+  gnu::used]] void (*const block_early)(int, char**, char**) = block_stop_signals;
+
 /// Messages of errors may quote file content and paths: long enough for any real path.
 constexpr std::size_t long_word_bytes = 400;
 
@@ -52,6 +70,8 @@ std::string argument_error(int argc, char** argv) {
 
 int main(int argc, char** argv) {
   pd::restart_with_process_settings(argv);
+  // Before anything slow (MPI, the scene): a stop request during set-up is not lost.
+  pd::hold_stop_requests();
   // Under mpirun every rank runs this main; MPI lives as long as it (a no-op without MPI).
   const pd::MpiSession mpi(argc, argv);
   const bool split = pd::world_communicator().size() > 1;
@@ -90,6 +110,9 @@ int main(int argc, char** argv) {
   try {
     for (const auto& command : commands) {
       if (*command.app) {
+        if (!command.stops_cleanly) {
+          pd::release_stop_requests();
+        }
         const int code = command.run();
         return code == 1 ? fail(code) : code; // 3 and 5 are reached by every rank together
       }

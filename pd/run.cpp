@@ -178,7 +178,7 @@ Command add_run_command(CLI::App& app) {
                       : "File does not exist: " + mine.string();
           },
           "FILE"));
-  return {cmd, [a] { return run(*a); }};
+  return {cmd, [a] { return run(*a); }, true};
 }
 
 } // namespace pd::cli

@@ -1,5 +1,5 @@
 // pd verify [CASE...] [-o DIR] [--list [--json]] [--sweep [--quick]] [--scenes DIR] [--threads N]
-// pd verify SCENE.yaml... [--fe-levels N] [--fe-coarse] [--gate FRACTION]
+// pd verify SCENE.yaml... [--fe-levels N] [--fe-coarse] [--gate FRACTION] [--junit FILE]
 // Verification cases with their gates: CASE.json in DIR for each, exit code 2 if a gate fails.
 // A scene file instead of a case name runs the scene beside its FE reference (pd-fem --scene).
 // The cases are the folders of verification/cases (or $PD_CASES_DIR), read at run time.
@@ -43,6 +43,7 @@ struct VerifyArgs {
   verification::SceneVerifyOptions scene;
   int fe_levels = 0;
   double gate = 0;
+  std::string junit;
 };
 
 std::string upper(std::string word) {
@@ -56,6 +57,72 @@ bool is_scene_file(const std::string& arg) {
   return ext == ".yaml" || ext == ".yml";
 }
 
+std::string xml_escaped(const std::string& text) {
+  std::string out;
+  for (const char c : text) {
+    switch (c) {
+    case '&':
+      out += "&amp;";
+      break;
+    case '<':
+      out += "&lt;";
+      break;
+    case '>':
+      out += "&gt;";
+      break;
+    case '"':
+      out += "&quot;";
+      break;
+    default:
+      out += c;
+    }
+  }
+  return out;
+}
+
+std::string text_of(const Json& j, const std::string& key) {
+  const Json* v = j.find(key);
+  if (v == nullptr) {
+    return {};
+  }
+  if (const auto t = v->text()) {
+    return *t;
+  }
+  if (const auto x = v->number()) {
+    return fmt::format("{:.9g}", *x);
+  }
+  if (const auto b = v->boolean()) {
+    return *b ? "true" : "false";
+  }
+  return {};
+}
+
+double number_of(const Json& j, const std::string& key) {
+  const Json* v = j.find(key);
+  return v != nullptr ? v->number().value_or(std::nan("")) : std::nan("");
+}
+
+/// One <testcase> (the JUnit structure of Ant / Maven Surefire that Jenkins, GitLab and GitHub
+/// read): a verdict `failed` is a <failure>, `measured` and `interrupted` are <skipped> (not
+/// judged), `error` an <error>; the values go to <system-out>.
+void junit_case(std::string& xml, const std::string& suite, const std::string& name, double seconds,
+                const std::string& verdict, const std::string& message, const std::string& out) {
+  xml += fmt::format("    <testcase classname=\"{}\" name=\"{}\" time=\"{:.3f}\">\n",
+                     xml_escaped(suite), xml_escaped(name), seconds);
+  if (verdict == "failed") {
+    xml += fmt::format("      <failure message=\"{}\" type=\"verification\">{}</failure>\n",
+                       xml_escaped(message), xml_escaped(out));
+  } else if (verdict == "error") {
+    xml += fmt::format("      <error message=\"{}\" type=\"error\"/>\n", xml_escaped(message));
+  } else if (verdict != "passed") {
+    xml += fmt::format("      <skipped message=\"{}\"/>\n", xml_escaped(message));
+  }
+  if (!out.empty()) {
+    xml += fmt::format("      <system-out>{}</system-out>\n", xml_escaped(out));
+  }
+  xml += "    </testcase>\n";
+}
+
 /// What pd verify has done, in DIR/summary.json: each case's verdict, written at the end and, on
 /// a stop request, at once (by the watchdog of app/interrupt.hpp while a case cannot stop): the
 /// cases finished keep their verdicts, the one running and the rest are `interrupted`, none is
@@ -63,14 +130,21 @@ bool is_scene_file(const std::string& arg) {
 class Ledger {
 public:
   Ledger(const std::string& out_dir, std::vector<std::string> names)
-      : dir_(out_dir), names_(std::move(names)), verdicts_(names_.size()) {}
+      : dir_(out_dir), names_(std::move(names)), verdicts_(names_.size()), results_(names_.size()) {
+  }
 
-  void finish(std::size_t k, bool passed) { record(k, passed ? "passed" : "failed"); }
-  /// A scene's verdict: passed, failed or measured (scene_verification.hpp).
-  void record(std::size_t k, const std::string& verdict) {
+  void finish(std::size_t k, bool passed, Json result) {
+    record(k, passed ? "passed" : "failed", std::move(result));
+  }
+  /// A scene's verdict: passed, failed or measured (scene_verification.hpp), or "error" where it
+  /// could not run; `result` is what its JSON file holds.
+  void record(std::size_t k, const std::string& verdict, Json result) {
     const std::lock_guard lock(mutex_);
     verdicts_[k] = verdict;
+    results_[k] = std::move(result);
   }
+  /// --junit FILE: the verdicts as JUnit XML too, written with summary.json.
+  void junit_to(std::string file) { junit_ = std::move(file); }
 
   /// `sig`: the signal that stopped the command, 0 if it ran to its end.
   void write(int sig) const {
@@ -93,13 +167,111 @@ public:
     j["cases"] = std::move(cases);
     std::filesystem::create_directories(dir_);
     write_file_atomically(dir_ / "summary.json", j.dump());
+    if (!junit_.empty()) {
+      write_file_atomically(junit_, junit());
+    }
   }
 
 private:
+  /// One <testsuite> per case or scene: a scene has one <testcase> per probe (PD, FE, their
+  /// difference, tolerance and FE error estimate) and one, `verdict`, for what judges the scene
+  /// as a whole (same materials, a PD equilibrium); a case has one <testcase>, its gate.
+  std::string junit() const {
+    std::string suites;
+    std::size_t all_tests = 0, all_failures = 0, all_errors = 0, all_skipped = 0;
+    double all_seconds = 0;
+    for (std::size_t k = 0; k < names_.size(); ++k) {
+      const std::string verdict = verdicts_[k].empty() ? "interrupted" : verdicts_[k];
+      const Json& r = results_[k];
+      const double seconds =
+          r.find("wall_seconds") != nullptr ? r.find("wall_seconds")->number().value_or(0.0) : 0.0;
+      std::string cases;
+      std::size_t tests = 0, failures = 0, errors = 0, skipped = 0;
+      const auto add = [&](const std::string& name, const std::string& v, const std::string& why,
+                           const std::string& out) {
+        ++tests;
+        failures += v == "failed" ? 1 : 0;
+        errors += v == "error" ? 1 : 0;
+        skipped += v != "passed" && v != "failed" && v != "error" ? 1 : 0;
+        junit_case(cases, names_[k], name, tests == 1 ? seconds : 0.0, v, why, out);
+      };
+      const std::string not_judged = verdict == "interrupted" ? "interrupted before it finished"
+                                     : verdict == "measured"  ? "measured, not judged: no --gate"
+                                                              : std::string();
+      std::string reasons;
+      if (const Json* list = r.find("reasons")) {
+        reasons = list->dump(0);
+        while (!reasons.empty() && reasons.back() == '\n') {
+          reasons.pop_back();
+        }
+      }
+      const Json* probes = r.find("probes");
+      if (probes != nullptr && probes->items() != nullptr) {
+        // Probes: each judged on its own tolerance.
+        // The scene's own conditions: failed where a reason (other than a probe beyond the
+        // gate, which its probe's testcase reports) says PD and FE are not comparable.
+        const Json::Array* why =
+            r.find("reasons") != nullptr ? r.find("reasons")->items() : nullptr;
+        const bool comparable = why == nullptr || why->empty() ||
+                                (why->size() == 1 && reasons.find("the gate") != std::string::npos);
+        add("verdict",
+            verdict == "measured" || verdict == "interrupted" ? verdict
+            : comparable                                      ? "passed"
+                                                              : "failed",
+            comparable ? not_judged : reasons,
+            fmt::format("PD status {}, PD {} s, FE {} s, reasons {}", text_of(r, "pd_status"),
+                        text_of(r, "pd_seconds"), text_of(r, "fe_seconds"), reasons));
+        for (const Json& p : *probes->items()) {
+          const std::string within = text_of(p, "within_tolerance");
+          const std::string v = verdict == "interrupted"   ? "interrupted"
+                                : text_of(p, "pd").empty() ? "failed"
+                                : within.empty()           ? "measured"
+                                : within == "true"         ? "passed"
+                                                           : "failed";
+          add(text_of(p, "name"), v,
+              v == "failed"     ? fmt::format("|PD - FE| = {:.6g} exceeds the tolerance {}",
+                                              std::abs(number_of(p, "pd") - number_of(p, "fe")),
+                                              text_of(p, "tolerance"))
+              : v == "measured" ? not_judged
+                                : std::string(v == "interrupted" ? not_judged : ""),
+              fmt::format("quantity {}, PD {}, FE {}, relative difference {}, judged difference "
+                          "{}, tolerance {}, FE error estimate {}{}",
+                          text_of(p, "quantity"), text_of(p, "pd"), text_of(p, "fe"),
+                          text_of(p, "relative_difference"), text_of(p, "judged_difference"),
+                          text_of(p, "tolerance").empty() ? "none" : text_of(p, "tolerance"),
+                          text_of(p, "fe_error_estimate"),
+                          text_of(p, "note").empty() ? "" : ", " + text_of(p, "note")));
+        }
+      } else {
+        add(names_[k], verdict,
+            verdict == "failed"  ? "the gate failed"
+            : verdict == "error" ? text_of(r, "error")
+                                 : not_judged,
+            text_of(r, "gate"));
+      }
+      all_tests += tests;
+      all_failures += failures;
+      all_errors += errors;
+      all_skipped += skipped;
+      all_seconds += seconds;
+      suites += fmt::format("  <testsuite name=\"{}\" tests=\"{}\" failures=\"{}\" errors=\"{}\" "
+                            "skipped=\"{}\" time=\"{:.3f}\">\n",
+                            xml_escaped(names_[k]), tests, failures, errors, skipped, seconds);
+      suites += cases;
+      suites += "  </testsuite>\n";
+    }
+    return fmt::format("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<testsuites name=\"pd verify\" "
+                       "tests=\"{}\" failures=\"{}\" errors=\"{}\" skipped=\"{}\" "
+                       "time=\"{:.3f}\">\n{}</testsuites>\n",
+                       all_tests, all_failures, all_errors, all_skipped, all_seconds, suites);
+  }
+
   mutable std::mutex mutex_;
   std::filesystem::path dir_;
   std::vector<std::string> names_;
   std::vector<std::string> verdicts_; ///< "passed", "failed", "measured", or empty while running
+  std::vector<Json> results_;         ///< each case's JSON, once finished
+  std::string junit_;
 };
 
 /// The end of pd verify: the summary, the count and the exit status (2 if a gate failed, 5 if
@@ -124,8 +296,18 @@ int verify_scenes(const VerifyArgs& a, const verification::Context& ctx) {
     names.push_back(std::filesystem::path(file).stem().string());
   }
   Ledger ledger(a.out_dir, names);
+  ledger.junit_to(a.junit);
   const AbandonOnInterrupt abandon([&ledger](int sig) { ledger.write(sig); });
   int failed = 0;
+  // A scene that cannot run ends the command (exit 1), its error recorded.
+  const auto error = [&](std::size_t k, const std::string& what) {
+    fmt::print(stderr, "{}\n", what);
+    Json e = Json::object();
+    e["error"] = what;
+    ledger.record(k, "error", std::move(e));
+    ledger.write(interrupt.signal());
+    return 1;
+  };
   for (std::size_t k = 0; k < a.cases.size() && !interrupt.requested(); ++k) {
     const std::string& file = a.cases[k];
     fmt::print("== {} — PD vs deal.II on the same continuum problem\n", file);
@@ -135,11 +317,9 @@ int verify_scenes(const VerifyArgs& a, const verification::Context& ctx) {
     try {
       result = verification::verify_scene(file, ctx, a.scene);
     } catch (const SceneError& e) {
-      fmt::print(stderr, "{}\n", e.what());
-      return 1;
+      return error(k, e.what());
     } catch (const std::exception& e) {
-      fmt::print(stderr, "error: {}\n", e.what());
-      return 1;
+      return error(k, fmt::format("error: {}", e.what()));
     }
     if (interrupt.requested()) {
       break; // its run stopped early: no verdict
@@ -154,7 +334,7 @@ int verify_scenes(const VerifyArgs& a, const verification::Context& ctx) {
     if (verdict == "measured") {
       fmt::print("   (no --gate: the differences are measured, not judged)\n");
     }
-    ledger.record(k, verdict);
+    ledger.record(k, verdict, std::move(result));
     failed += verdict == "failed" ? 1 : 0;
   }
   return conclude(ledger, interrupt, a.cases.size(), failed);
@@ -162,8 +342,9 @@ int verify_scenes(const VerifyArgs& a, const verification::Context& ctx) {
 
 /// Run one case, write its JSON and say whether its gate passed; nothing if a stop request
 /// came while it ran (its runs ended early, so its numbers are not its result).
-std::optional<bool> run_case(const verification::Case& c, verification::Context ctx,
-                             const std::string& out_dir, const InterruptGuard& interrupt) {
+std::optional<std::pair<bool, Json>> run_case(const verification::Case& c,
+                                              verification::Context ctx, const std::string& out_dir,
+                                              const InterruptGuard& interrupt) {
   fmt::print("== {} — {}\n", c.name, c.summary);
   std::fflush(stdout);
   ctx.folder = c.folder->path;
@@ -182,7 +363,7 @@ std::optional<bool> run_case(const verification::Case& c, verification::Context 
   const bool passed = verdict != nullptr && verdict->boolean().value_or(false);
   fmt::print("   {} in {:.1f} s -> {}/{}.json\n", passed ? "PASSED" : "FAILED", wall, out_dir,
              c.name);
-  return passed;
+  return std::pair{passed, std::move(result)};
 }
 
 int verify(const VerifyArgs& a) {
@@ -238,13 +419,14 @@ int verify(const VerifyArgs& a) {
     names.push_back(c->name);
   }
   Ledger ledger(a.out_dir, names);
+  ledger.junit_to(a.junit);
   const AbandonOnInterrupt abandon([&ledger](int sig) { ledger.write(sig); });
   int failed = 0;
   for (std::size_t k = 0; k < selected.size() && !interrupt.requested(); ++k) {
-    const std::optional<bool> passed = run_case(*selected[k], ctx, a.out_dir, interrupt);
-    if (passed) {
-      ledger.finish(k, *passed);
-      failed += *passed ? 0 : 1;
+    auto outcome = run_case(*selected[k], ctx, a.out_dir, interrupt);
+    if (outcome) {
+      ledger.finish(k, outcome->first, std::move(outcome->second));
+      failed += outcome->first ? 0 : 1;
     }
   }
   return conclude(ledger, interrupt, selected.size(), failed);
@@ -282,8 +464,12 @@ Command add_verify_command(CLI::App& app) {
             return std::isfinite(v) && v > 0 && v <= 1 ? "" : "must be a fraction in (0, 1]";
           },
           "FRACTION in (0, 1]"));
+  cmd->add_option("--junit", a->junit,
+                  "also write the verdicts as JUnit XML to FILE (one testsuite per case or scene, "
+                  "one testcase per probe; failed is a failure, measured and interrupted are "
+                  "skipped) for CI systems");
   add_threads_option(*cmd, a->threads);
-  return {cmd, [a] { return verify(*a); }};
+  return {cmd, [a] { return verify(*a); }, true};
 }
 
 } // namespace pd::cli

@@ -108,8 +108,8 @@ DimTags add_region(const SolidRegion& region, const int dim, const double R) {
 }
 
 // Why: the body of the scene as CSG solids, split along the faces between bodies, of the
-// supports and of the loaded cells (intersected with the body first, so nothing outside it is
-// added).
+// supports and of the region loads' cells (intersected with the body first, so nothing outside
+// it is added).
 DimTags build_body(const SceneProblem& p, const int dim) {
   const double R = beyond(p);
   DimTags body, out;

@@ -4,14 +4,15 @@
 //    centre lies outside the body removed. Refining it globally halves h exactly.
 //  * gmsh_mesh: cylinders, spheres, half-spaces, holes. The body is built by OpenCASCADE
 //    constructive solid geometry in Gmsh (union of each body's parts, less its holes, less the
-//    mirror supports' regions), fragmented by the supports' and loaded cells' boxes so that
-//    their faces are mesh faces, and meshed with all quadrilaterals (2D: Frontal-Delaunay,
-//    recombined and subdivided) or all hexahedra (3D: tetrahedra subdivided into four hexes).
-//    Level k is the level-0 mesh split k times by Gmsh, which puts the new boundary nodes on
-//    the CAD surfaces: cells halve per level everywhere, also where small features set the
-//    size. Boundary faces on a sphere or cylinder get it as their manifold, and the solver maps
-//    with MappingQ(2): the geometric error is O(h³); Mesh.MeshSizeFromCurvature puts 16 cells
-//    around each circle on level 0, 16·2^k on level k.
+//    mirror supports' regions), fragmented by the supports' and region loads' boxes so that
+//    their faces are mesh faces (not by point loads' cells: their integrals resolve them by
+//    quadrature), and meshed with all quadrilaterals (2D: Frontal-Delaunay, recombined and
+//    subdivided) or all hexahedra (3D: tetrahedra subdivided into four hexes). Level k is the
+//    level-0 mesh split k times by Gmsh, which puts the new boundary nodes on the CAD surfaces:
+//    cells halve per level everywhere, also where small features set the size. Boundary faces on
+//    a sphere or cylinder get it as their manifold, and the solver maps with MappingQ(2): the
+//    geometric error is O(h³); Mesh.MeshSizeFromCurvature puts 16 cells around each circle on
+//    level 0, 16·2^k on level k.
 #pragma once
 
 #include "scene_problem.h"
@@ -24,7 +25,7 @@ using namespace dealii;
 
 // The level-0 target cell size before the budget enlarges it: the smallest side of any body box
 // and the smallest radius of a cylinder or sphere (body or hole), so the thinnest part of the
-// body gets a cell across; for Gmsh also the smallest side of a support or loaded-cell box.
+// body gets a cell across; for Gmsh also the smallest side of a support or region-load box.
 double base_cell_size(const SceneProblem& problem, bool gmsh);
 
 template <int dim>

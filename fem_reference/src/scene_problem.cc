@@ -2,6 +2,7 @@
 
 #include "libpd/app/probes.hpp"
 #include "libpd/discretisation/lattice.hpp"
+#include "libpd/discretisation/surface_load.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -128,11 +129,25 @@ SceneLoad translate_load(const pd::ModelSpec& spec, const pd::ParticleSet& parti
                          const pd::LoadSpec& load) {
   SceneLoad out;
   out.name = load.name;
+  using Kind = pd::BoxRegionLoad::Kind;
+  if (load.load.kind == Kind::pressure) {
+    // The same test as PD's: a surface that bounds no body is an error in both.
+    if (pd::pressure_forces(spec.dimension, spec.lattice.spacing, spec.bodies, particles,
+                            particles.size(), load.load.surface, load.load.pressure)
+            .particle.empty())
+      throw std::runtime_error("pressure load '" + load.name +
+                               "' acts on no particle: its surface bounds no body");
+    out.pressure = true;
+    out.pressure_value = load.load.pressure;
+    out.surface = load.load.surface;
+    return out;
+  }
   const auto members = pd::load_particles(spec, particles, load, particles.size());
   if (members.empty())
     throw std::runtime_error("load '" + load.name + "' acts on no particle");
   out.cells = cells_of(spec, particles, members);
-  using Kind = pd::BoxRegionLoad::Kind;
+  out.bounds = cell_bounds(out.cells);
+  out.conforming = load.load.kind != Kind::point;
   switch (load.load.kind) {
   case Kind::body:
     out.density = true;
@@ -146,6 +161,8 @@ SceneLoad translate_load(const pd::ModelSpec& spec, const pd::ParticleSet& parti
   case Kind::per_length:
     for (int c = 0; c < 3; ++c)
       out.value[c] = load.load.value[c] * load.load.measure;
+    break;
+  case Kind::pressure:
     break;
   }
   return out;
@@ -287,10 +304,21 @@ SceneProblem translate_scene(const pd::Scene& scene) {
   p.curved = p.curved || !p.cracks.empty();
 
   const pd::ParticleSet particles = scene_particles(scene);
+  // Why: a load's cells become grid planes of the tensor-product grid (nested, exact) and, for
+  // region loads (layers, patches), faces of a Gmsh mesh. A point load's cells do not: many of
+  // them on a curved body made as many small features and slivers between them (80 loads on a
+  // hole failed after minutes); the load integrals resolve those cells by quadrature.
   for (const pd::LoadSpec& load : spec.loads) {
     p.loads.push_back(translate_load(spec, particles, load));
-    p.conforming.push_back(cell_bounds(p.loads.back().cells));
-    add_box_planes(p.conforming.back(), dim, planes);
+    const SceneLoad& l = p.loads.back();
+    if (l.conforming && !l.pressure)
+      p.conforming.push_back(l.bounds);
+    if (!l.pressure)
+      add_box_planes(l.bounds, dim, planes);
+    else if (l.surface.kind == pd::Shape::Kind::box)
+      add_box_planes(l.surface.box, dim, planes);
+    else
+      p.curved = true;
   }
   p.probes = translate_probes(scene, particles, p);
 

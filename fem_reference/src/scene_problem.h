@@ -32,6 +32,12 @@ struct SceneLoad {
   bool density = false;    // true: `value` is a force density [N/m³] (kind body)
   pd::Vec3 value{0, 0, 0}; // the total force [N] spread over `cells`, or the density
   LatticeCells cells;
+  pd::Box bounds;         // of `cells`
+  bool conforming = true; // the Gmsh mesh has faces on `bounds` (not for point loads)
+  // A pressure [Pa] on the mesh's boundary faces that lie on `surface` (instead of cells).
+  bool pressure = false;
+  double pressure_value = 0.;
+  pd::Shape surface;
 };
 
 struct SceneProbe {
@@ -64,8 +70,9 @@ struct SceneProblem {
   std::vector<SceneLoad> loads;
   std::vector<SceneProbe> probes;
   // The same geometry as solids, for Gmsh: the bodies, and the mirror supports' regions that
-  // are taken out of them; `conforming`: boxes whose faces the mesh must contain (supports,
-  // loaded cells). `curved`: some shape is not a box, so the tensor-product grid cannot mesh it.
+  // are taken out of them; `conforming`: boxes whose faces the mesh must contain (supports, the
+  // cells of region loads; a point load's few cells are resolved by quadrature instead). `curved`:
+  // some shape is not a box, so the tensor-product grid cannot mesh it.
   std::vector<SolidRegion> body_solids;
   std::vector<SolidRegion> removed_solids;
   std::vector<pd::Box> conforming;

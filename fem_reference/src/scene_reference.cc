@@ -8,6 +8,7 @@
 //     -div σ(u) = b      in Ω,        σ = λ tr ε I + 2 μ ε   (λ → λ* in plane stress),
 //     u_c = g_c          on the nodes of fixed / displacement supports (component c),
 //     u = 0              on the clamp plane of a mirror support,
+//     σ n = −p n         on the surface of a pressure load (where it bounds Ω),
 //     σ n = 0            elsewhere on ∂Ω,
 //
 // with b the loads as PD applies them: a resultant F shared among the particles a load selects
@@ -17,15 +18,19 @@
 // The mesh is a tensor-product grid whose lines contain every box face of bodies, supports and
 // loaded cells, subdivided to a target size, with the cells outside Ω removed; each level
 // refines it globally (h, h/2, h/4, ...), so Richardson extrapolation with ratio 2 applies.
+// Curved shapes are meshed by Gmsh from the geometry alone (scene_mesh.h).
 // Probes read what PD reads: the mean of a displacement component over the particles libpd
 // resolves for the probe (evaluated at their positions), or a support's reaction, the sum of
 // the residual K u - f over the dofs it constrains.
 #include "scene_reference.h"
 
 #include "elastic_common.h"
+#include "libpd/core/memory.hpp"
+#include "libpd/discretisation/surface_load.hpp"
 #include "report.h"
 #include "scene_mesh.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <deal.II/base/quadrature_lib.h>
@@ -39,7 +44,9 @@
 #include <iomanip>
 #include <iostream>
 #include <map>
+#include <optional>
 #include <set>
+#include <sstream>
 
 namespace pdfem {
 namespace {
@@ -87,6 +94,29 @@ namespace {
 // Unknowns of a Q2 vector field on n cells, roughly: 2^dim nodes per cell, dim components.
 double estimated_dofs(const int dim, const double cells) {
   return dim * std::pow(2., dim) * cells;
+}
+
+// Why: the memory a level needs, estimated from its cells before anything of it is allocated,
+// so that refining stops with a message instead of std::bad_alloc minutes later. Per unknown,
+// Q2 couples about 64 nodes in 3D and 16 in 2D (a cell's 8 or 4 nodes weighted by how many cells
+// share them): 3 · 64 entries of 12 bytes (value and column) in 3D, 2 · 16 in 2D, held about five
+// times over (the sparsity pattern, the matrix, the triangle the factorisation reads, its input
+// copy and the solver's work). The 3D Cholesky factor grows like n^(4/3) from the notched beam's
+// 546 MB at 93,075 unknowns (elastic_common.h), the 2D one like n log n (taken at 30 n log2 n
+// entries); beyond direct_solver_max_dofs the AMG hierarchy is about twice the matrix. The mesh's
+// boundary nodes add a quarter to estimated_dofs (the 3D cantilever's levels: 18,603 and
+// 133,875 unknowns for 14,976 and 119,808). Measured there at 133,875 unknowns: a 935 MB factor
+// and 2.45 GB peak, estimated 2.8 GB.
+double estimated_level_bytes(const int dim, const double cells) {
+  const double dofs = 1.25 * estimated_dofs(dim, cells);
+  const double row = dim == 3 ? 3. * 64. * 12. : 2. * 16. * 12.;
+  double bytes = 5. * row * dofs;
+  if (dofs <= static_cast<double>(direct_solver_max_dofs(dim)))
+    bytes += dim == 3 ? 546e6 * std::pow(dofs / 93075., 4. / 3.)
+                      : 8. * 30. * dofs * std::log2(std::max(dofs, 2.));
+  else
+    bytes += 2. * row * dofs;
+  return bytes;
 }
 } // namespace
 
@@ -168,6 +198,7 @@ void SceneReference<dim>::setup_system() {
   const auto n = dof_handler->n_dofs();
   std::vector<Point<dim>> points(n);
   DoFTools::map_dofs_to_support_points(*mapping, *dof_handler, points);
+  dof_points = points;
   dof_component.assign(n, 0);
   std::vector<types::global_dof_index> dofs(fe.n_dofs_per_cell());
   for (const auto& cell : dof_handler->active_cell_iterators()) {
@@ -209,6 +240,10 @@ void SceneReference<dim>::setup_system() {
       throw std::runtime_error("support '" + sup.name + "' holds no node of the FE mesh");
   }
 
+  free_body = problem.supports.empty();
+  if (free_body)
+    pin_rigid_motion(value);
+
   constraints.clear();
   for (const auto& [dof, g] : value) {
     constraints.add_line(dof);
@@ -224,26 +259,226 @@ void SceneReference<dim>::setup_system() {
   solution.reinit(n);
 }
 
+// Why: a body no support holds is free to move rigidly, and K is singular. As in PD's static
+// solve (libpd time/static_assembly.hpp, rigid_motion_pins), a node A (every component), the
+// node B farthest from it (the components across AB) and in 3D the node C farthest from the line
+// AB (the component along the normal of ABC) are held at zero: that removes the rigid motions
+// and nothing else, so under balanced loads they carry no reaction.
+template <int dim>
+void SceneReference<dim>::pin_rigid_motion(std::map<types::global_dof_index, double>& value) const {
+  const auto n = dof_points.size();
+  const auto dominant = [](const Tensor<1, 3>& v) {
+    unsigned int k = 0;
+    for (unsigned int a = 1; a < dim; ++a)
+      k = std::abs(v[a]) > std::abs(v[k]) ? a : k;
+    return k;
+  };
+  const auto as3 = [](const Point<dim>& p) {
+    Tensor<1, 3> t;
+    for (unsigned int a = 0; a < dim; ++a)
+      t[a] = p[a];
+    return t;
+  };
+  types::global_dof_index a = 0;
+  for (types::global_dof_index i = 1; i < n; ++i) {
+    const auto& p = dof_points[i];
+    const auto& q = dof_points[a];
+    if (std::lexicographical_compare(p.begin_raw(), p.end_raw(), q.begin_raw(), q.end_raw()))
+      a = i;
+  }
+  const auto farthest = [&](const auto& distance) {
+    types::global_dof_index best = 0;
+    for (types::global_dof_index i = 1; i < n; ++i)
+      best = distance(as3(dof_points[i])) > distance(as3(dof_points[best])) ? i : best;
+    return best;
+  };
+  const Tensor<1, 3> xa = as3(dof_points[a]);
+  const Tensor<1, 3> xb = as3(dof_points[farthest([&](const auto& p) { return (p - xa).norm(); })]);
+  const Tensor<1, 3> ab = xb - xa;
+  Tensor<1, 3> xc, normal;
+  if (dim == 3) {
+    xc = as3(
+        dof_points[farthest([&](const auto& p) { return cross_product_3d(ab, p - xa).norm(); })]);
+    normal = cross_product_3d(ab, xc - xa);
+  }
+  const double tol = problem.tolerance();
+  for (types::global_dof_index i = 0; i < n; ++i) {
+    const Tensor<1, 3> p = as3(dof_points[i]);
+    const unsigned int c = dof_component[i];
+    if ((p - xa).norm() <= tol || ((p - xb).norm() <= tol && c != dominant(ab)) ||
+        (dim == 3 && (p - xc).norm() <= tol && c == dominant(normal)))
+      value[i] = 0.;
+  }
+}
+
+// Why: a free body has an equilibrium only under loads of zero resultant and zero moment: both
+// are integrated over the loads' cells as the load vector integrates them (before the pinned
+// dofs' rows are cleared).
+template <int dim>
+void SceneReference<dim>::require_balanced_loads() const {
+  const QGauss<dim> quadrature(fe.degree + 1);
+  FEValues<dim> fv(*mapping, fe, quadrature, update_quadrature_points | update_JxW_values);
+  Tensor<1, 3> force, moment;
+  double scale = 0., size = 0.;
+  for (const auto& cell : dof_handler->active_cell_iterators()) {
+    fv.reinit(cell);
+    for (const unsigned int q : fv.quadrature_point_indices()) {
+      const pd::Vec3 x = to_vec3(fv.quadrature_point(q));
+      Tensor<1, 3> r;
+      for (unsigned int a = 0; a < dim; ++a)
+        r[a] = x[a] - 0.5 * (problem.bounding_box.lo[a] + problem.bounding_box.hi[a]);
+      for (std::size_t l = 0; l < problem.loads.size(); ++l)
+        if (problem.loads[l].cells.contains(x)) {
+          Tensor<1, 3> f;
+          for (unsigned int a = 0; a < dim; ++a)
+            f[a] = load_density[l][a] * fv.JxW(q);
+          force += f;
+          moment += cross_product_3d(r, f);
+          scale += f.norm();
+          size = std::max(size, r.norm());
+        }
+    }
+  }
+  if (force.norm() > 1e-9 * scale || moment.norm() > 1e-9 * scale * size) {
+    std::ostringstream what;
+    what << "no support holds the body and its loads are not balanced (resultant " << force
+         << ", moment " << moment
+         << "), so it has no equilibrium: add a support (e.g. a fixed box) or balance the loads";
+    throw std::runtime_error(what.str());
+  }
+}
+
+// Why: the free body's solution is defined up to a rigid motion; the one reported has none in
+// the mean (zero mean displacement and rotation about the centroid, the L2 projection off the
+// rigid motions), as PD's static solve reports it. Q2 holds the rigid motions exactly, so they
+// are subtracted node by node.
+template <int dim>
+void SceneReference<dim>::remove_rigid_motion() {
+  const QGauss<dim> quadrature(fe.degree + 1);
+  FEValues<dim> fv(*mapping, fe, quadrature,
+                   update_values | update_quadrature_points | update_JxW_values);
+  std::vector<Vector<double>> u(quadrature.size(), Vector<double>(dim));
+  double volume = 0.;
+  Tensor<1, 3> centre, mean;
+  std::vector<std::pair<Tensor<1, 3>, Tensor<1, 3>>> samples; // (x, u) per quadrature point
+  std::vector<double> weights;
+  for (const auto& cell : dof_handler->active_cell_iterators()) {
+    fv.reinit(cell);
+    fv.get_function_values(solution, u);
+    for (const unsigned int q : fv.quadrature_point_indices()) {
+      Tensor<1, 3> x, v;
+      for (unsigned int a = 0; a < dim; ++a) {
+        x[a] = fv.quadrature_point(q)[a];
+        v[a] = u[q][a];
+      }
+      volume += fv.JxW(q);
+      centre += fv.JxW(q) * x;
+      mean += fv.JxW(q) * v;
+      samples.emplace_back(x, v);
+      weights.push_back(fv.JxW(q));
+    }
+  }
+  centre /= volume;
+  mean /= volume;
+  FullMatrix<double> inertia(3, 3);
+  Vector<double> torque(3);
+  for (std::size_t k = 0; k < samples.size(); ++k) {
+    const Tensor<1, 3> r = samples[k].first - centre;
+    const Tensor<1, 3> t = cross_product_3d(r, samples[k].second - mean);
+    for (unsigned int a = 0; a < 3; ++a) {
+      torque(a) += weights[k] * t[a];
+      for (unsigned int b = 0; b < 3; ++b)
+        inertia(a, b) += weights[k] * ((a == b ? r * r : 0.) - r[a] * r[b]);
+    }
+  }
+  Tensor<1, 3> omega;
+  if (dim == 3) {
+    FullMatrix<double> inverse(3, 3);
+    inverse.invert(inertia);
+    Vector<double> w(3);
+    inverse.vmult(w, torque);
+    for (unsigned int a = 0; a < 3; ++a)
+      omega[a] = w(a);
+  } else
+    omega[2] = torque(2) / inertia(2, 2);
+  for (types::global_dof_index i = 0; i < dof_points.size(); ++i) {
+    Tensor<1, 3> r;
+    for (unsigned int a = 0; a < dim; ++a)
+      r[a] = dof_points[i][a] - centre[a];
+    const Tensor<1, 3> rigid = mean + cross_product_3d(omega, r);
+    solution[i] -= rigid[dof_component[i]];
+  }
+}
+
+// Why: a Gmsh mesh does not follow point loads (scene_problem.h), so a cell may hold part of such
+// a load's lattice cells: the load integrals over it take Gauss points on sub-cells of about λ/4,
+// which resolve the loaded cells' boundary to a quarter spacing (in 3D at most 16 sub-cells per
+// edge). 0: the cell's own quadrature is exact (the tensor-product grid, whose planes contain
+// the loaded cells, cells of the conforming loads, and cells away from every point load).
+template <int dim>
+unsigned int SceneReference<dim>::load_subdivisions(
+    const typename DoFHandler<dim>::active_cell_iterator& cell) const {
+  if (!use_gmsh)
+    return 0;
+  const BoundingBox<dim> box = cell->bounding_box();
+  const double reach = problem.spacing; // curved faces bulge past the vertices' box
+  bool touches = false;
+  for (const SceneLoad& load : problem.loads) {
+    bool meets = !load.pressure && !load.conforming;
+    for (unsigned int a = 0; a < dim && meets; ++a)
+      meets = load.bounds.lo[a] <= box.get_boundary_points().second[a] + reach &&
+              box.get_boundary_points().first[a] - reach <= load.bounds.hi[a];
+    touches = touches || meets;
+  }
+  if (!touches)
+    return 0;
+  const double cap = dim == 2 ? 256. : 16.;
+  return static_cast<unsigned int>(
+      std::clamp(std::ceil(4. * cell->diameter() / problem.spacing), 2., cap));
+}
+
+template <int dim>
+template <class Add>
+void SceneReference<dim>::load_quadrature(
+    const typename DoFHandler<dim>::active_cell_iterator& cell, FEValues<dim>& fv,
+    const UpdateFlags flags, Add&& add) const {
+  const unsigned int m = load_subdivisions(cell);
+  if (m == 0) {
+    for (const unsigned int q : fv.quadrature_point_indices())
+      add(fv, q);
+    return;
+  }
+  FEValues<dim> sub(*mapping, fe, QIterated<dim>(QGauss<1>(2), m), flags);
+  sub.reinit(cell);
+  for (const unsigned int q : sub.quadrature_point_indices())
+    add(sub, q);
+}
+
 // Why: PD conserves each load's resultant exactly, so the density F/V uses the volume V of the
-// loaded cells as this mesh integrates it (the same number as the particles' volumes when the
-// mesh resolves the cells, which the grid planes ensure for box regions). In 2D the problem is
-// per unit thickness t: V = area · t.
+// loaded cells as this mesh's load quadrature integrates it (the same number as the particles'
+// volumes when the mesh resolves the cells, which the grid planes ensure for box regions). In
+// 2D the problem is per unit thickness t: V = area · t.
 template <int dim>
 void SceneReference<dim>::measure_loads() {
   const QGauss<dim> quadrature(fe.degree + 1);
-  FEValues<dim> fv(*mapping, fe, quadrature, update_quadrature_points | update_JxW_values);
+  const UpdateFlags flags = update_quadrature_points | update_JxW_values;
+  FEValues<dim> fv(*mapping, fe, quadrature, flags);
   std::vector<double> volume(problem.loads.size(), 0.);
   for (const auto& cell : dof_handler->active_cell_iterators()) {
     fv.reinit(cell);
-    for (const unsigned int q : fv.quadrature_point_indices())
+    load_quadrature(cell, fv, flags, [&](const FEValues<dim>& v, const unsigned int q) {
       for (std::size_t l = 0; l < problem.loads.size(); ++l)
-        if (problem.loads[l].cells.contains(to_vec3(fv.quadrature_point(q))))
-          volume[l] += fv.JxW(q);
+        if (!problem.loads[l].pressure &&
+            problem.loads[l].cells.contains(to_vec3(v.quadrature_point(q))))
+          volume[l] += v.JxW(q);
+    });
   }
   const double thickness = dim == 2 ? problem.dimension.thickness : 1.;
   load_density.assign(problem.loads.size(), Tensor<1, dim>());
   for (std::size_t l = 0; l < problem.loads.size(); ++l) {
     const SceneLoad& load = problem.loads[l];
+    if (load.pressure)
+      continue;
     if (volume[l] <= 0.)
       throw std::runtime_error("load '" + load.name + "': its cells hold no part of the body");
     for (unsigned int c = 0; c < dim; ++c)
@@ -251,9 +486,45 @@ void SceneReference<dim>::measure_loads() {
   }
 }
 
+// Why: a pressure is the Neumann condition σn = −p n on the boundary faces that lie on its
+// surface (all vertices on one part of it, scene_problem.h), integrated with the mapping, so a
+// curved wall's normal turns along the face. The FE problem in 2D is per unit thickness: the
+// traction needs no thickness factor.
+template <int dim>
+void SceneReference<dim>::add_pressure(const typename DoFHandler<dim>::active_cell_iterator& cell,
+                                       Vector<double>& cell_rhs) const {
+  if (!cell->at_boundary())
+    return;
+  std::unique_ptr<FEFaceValues<dim>> fv;
+  for (const SceneLoad& load : problem.loads) {
+    if (!load.pressure)
+      continue;
+    const double tol = std::max(problem.tolerance(), 1e-6 * load.surface.radius);
+    for (const unsigned int f : cell->face_indices()) {
+      if (!cell->face(f)->at_boundary())
+        continue;
+      unsigned int shared = ~0U;
+      for (const unsigned int v : cell->face(f)->vertex_indices())
+        shared &= pd::surface_patches(load.surface, to_vec3(cell->face(f)->vertex(v)), dim, tol);
+      if (shared == 0)
+        continue;
+      if (!fv)
+        fv = std::make_unique<FEFaceValues<dim>>(*mapping, fe, QGauss<dim - 1>(fe.degree + 1),
+                                                 update_values | update_normal_vectors |
+                                                     update_JxW_values);
+      fv->reinit(cell, f);
+      for (const unsigned int q : fv->quadrature_point_indices())
+        for (unsigned int i = 0; i < fe.n_dofs_per_cell(); ++i)
+          cell_rhs(i) -= load.pressure_value * fv->normal_vector(q)[component[i]] *
+                         fv->shape_value_component(i, q, component[i]) * fv->JxW(q);
+    }
+  }
+}
+
 // Why: one cell's stiffness (elastic_common.h, with the Lamé constants of the body that holds
 // the cell's centre, E scaled by the material's stiffness factor as PD scales c) and its load
-// vector ∫ b·φ_i over the quadrature points inside each load's cells.
+// vector: ∫ b·φ_i over the load quadrature's points inside each load's cells, and the
+// pressures on its boundary faces.
 template <int dim>
 void SceneReference<dim>::cell_system(const typename DoFHandler<dim>::active_cell_iterator& cell,
                                       FEValues<dim>& fv, FullMatrix<double>& cell_matrix,
@@ -273,14 +544,16 @@ void SceneReference<dim>::cell_system(const typename DoFHandler<dim>::active_cel
                                             problem.plane_stress());
   std::vector<Tensor<1, dim>> grad;
   add_elastic_cell_matrix(fv, component, lame, grad, cell_matrix);
-  for (const unsigned int q : fv.quadrature_point_indices()) {
-    const pd::Vec3 x = to_vec3(fv.quadrature_point(q));
-    for (std::size_t l = 0; l < problem.loads.size(); ++l)
-      if (problem.loads[l].cells.contains(x))
-        for (unsigned int i = 0; i < n; ++i)
-          cell_rhs(i) += fv.shape_value_component(i, q, component[i]) *
-                         load_density[l][component[i]] * fv.JxW(q);
-  }
+  load_quadrature(cell, fv, update_values | update_quadrature_points | update_JxW_values,
+                  [&](const FEValues<dim>& v, const unsigned int q) {
+                    const pd::Vec3 x = to_vec3(v.quadrature_point(q));
+                    for (std::size_t l = 0; l < problem.loads.size(); ++l)
+                      if (!problem.loads[l].pressure && problem.loads[l].cells.contains(x))
+                        for (unsigned int i = 0; i < n; ++i)
+                          cell_rhs(i) += v.shape_value_component(i, q, component[i]) *
+                                         load_density[l][component[i]] * v.JxW(q);
+                  });
+  add_pressure(cell, cell_rhs);
 }
 
 template <int dim>
@@ -306,8 +579,12 @@ void SceneReference<dim>::solve() {
   Point<dim> centre;
   for (unsigned int a = 0; a < dim; ++a)
     centre[a] = (problem.bounding_box.lo[a] + problem.bounding_box.hi[a]) / 2;
+  if (free_body)
+    require_balanced_loads();
   const CgStatistics stats = solve_elasticity(*dof_handler, system_matrix, system_rhs, constraints,
                                               centre, "AMG", 1e-10, 10000, solution);
+  if (free_body)
+    remove_rigid_motion();
   levels.back().solver = solver_summary(stats);
 }
 
@@ -420,6 +697,8 @@ void SceneReference<dim>::output_results(const double wall_time) const {
     }
     w.end_array();
     w.value("wall_time_s", wall_time);
+    if (!stopped_for_memory.empty())
+      w.value("refinement_stopped", stopped_for_memory);
     w.begin_array("levels");
     for (const SceneLevel& l : levels) {
       w.begin_object();
@@ -462,11 +741,27 @@ template <int dim>
 std::vector<SceneLevel> SceneReference<dim>::run() {
   const auto t_start = std::chrono::steady_clock::now();
   unsigned int n_levels = 0;
+  const std::optional<pd::MemoryBudget> memory = pd::available_memory();
   for (unsigned int level = 0; level == 0 || level < n_levels; ++level) {
     const auto t0 = std::chrono::steady_clock::now();
     make_grid(level);
     if (level == 0)
       n_levels = choose_levels();
+    const double need = estimated_level_bytes(dim, triangulation.n_active_cells());
+    if (memory && need > memory->bytes) {
+      std::ostringstream what;
+      what << "level " << level << " (" << triangulation.n_active_cells()
+           << " cells) would need about " << pd::format_bytes(need) << ", more than the "
+           << pd::format_bytes(memory->bytes) << " "
+           << (memory->source == "PD_MEMORY_LIMIT" ? "PD_MEMORY_LIMIT allows" : "available");
+      if (level == 0)
+        throw std::runtime_error(what.str() + ": coarsen the scene's smallest feature or raise "
+                                              "the memory limit");
+      std::cerr << "pd-fem: " << what.str() << ": refinement stops at " << level
+                << " levels (the finished ones are kept)" << std::endl;
+      stopped_for_memory = what.str();
+      break;
+    }
     levels.emplace_back();
     SceneLevel& l = levels.back();
     setup_system();

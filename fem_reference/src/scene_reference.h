@@ -15,6 +15,7 @@
 #include <deal.II/lac/trilinos_vector.h>
 #include <deal.II/lac/vector.h>
 #include <filesystem>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -32,9 +33,9 @@ struct SceneOptions {
 struct SceneLevel {
   unsigned int cells = 0;
   types::global_dof_index dofs = 0;
-  double h = 0.;       // target cell size of the level, m
-  double seconds = 0.; // wall time of the level
-  std::string solver; // solver_summary: how K u = f was solved
+  double h = 0.;              // target cell size of the level, m
+  double seconds = 0.;        // wall time of the level
+  std::string solver;         // solver_summary: how K u = f was solved
   std::vector<double> values; // one per probe
 };
 
@@ -61,11 +62,21 @@ private:
   double budget() const;
   void mesh(double h0, unsigned int level);
   void measure_loads();
+  unsigned int load_subdivisions(const typename DoFHandler<dim>::active_cell_iterator& cell) const;
+  // Calls add(x, JxW) at the points of the quadrature that integrates the loads over `cell`.
+  template <class Add>
+  void load_quadrature(const typename DoFHandler<dim>::active_cell_iterator& cell,
+                       FEValues<dim>& fe_values, UpdateFlags flags, Add&& add) const;
+  void add_pressure(const typename DoFHandler<dim>::active_cell_iterator& cell,
+                    Vector<double>& cell_rhs) const;
   void cell_system(const typename DoFHandler<dim>::active_cell_iterator& cell,
                    FEValues<dim>& fe_values, FullMatrix<double>& cell_matrix,
                    Vector<double>& cell_rhs) const;
   double reaction(const SceneProbe& probe) const;
   double normal_stress(const pd::Vec3& x, const std::vector<Tensor<1, dim>>& grad, int c) const;
+  void pin_rigid_motion(std::map<types::global_dof_index, double>& value) const;
+  void require_balanced_loads() const;
+  void remove_rigid_motion();
 
   const SceneProblem& problem;
   const SceneOptions options;
@@ -78,6 +89,9 @@ private:
   AffineConstraints<double> constraints;
   std::vector<unsigned int> component; // of each local shape function
   std::vector<types::global_dof_index> dof_component;
+  std::vector<Point<dim>> dof_points; // support point of each dof
+  // No support holds the body: its rigid motion is pinned, then removed (pin_rigid_motion).
+  bool free_body = false;
 
   TrilinosWrappers::SparseMatrix system_matrix;
   TrilinosWrappers::MPI::Vector system_rhs;
@@ -89,5 +103,6 @@ private:
   // Per load: force density [N/m³] on its cells on this level's mesh.
   std::vector<Tensor<1, dim>> load_density;
   std::vector<SceneLevel> levels;
+  std::string stopped_for_memory; // why refinement stopped before the levels asked for
 };
 } // namespace pdfem

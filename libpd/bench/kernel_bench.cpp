@@ -5,7 +5,8 @@
 //  * HandWrittenElastic: a plain scalar CSR gather loop written out by hand (exact, uniform c).
 //  * HandWrittenSimd: the same loop vectorised by hand over Highway (handwritten_simd.cpp).
 //  * Dispatched/<effects>: the kernel picked by make_force_evaluator for that effect set
-//    (SIMD path); Scalar/<effects>: the retained scalar kernel.
+//    (SIMD path); Dispatched/scalar_<effects>: the retained scalar kernel. fibres: the
+//    virtual-fibre model's kernel on the same lattice (its own family: compare per bond).
 //  * Target/<isa>: elastic exact on one instruction set (SSE4, AVX2, AVX3 = AVX-512).
 //  * Threshold/<nx>/<threads>: elastic exact on Model A's cross-section, nx cells long, on 1 or 2
 //    threads with the parallel threshold bypassed: where the second thread starts to pay.
@@ -195,8 +196,11 @@ void Target(benchmark::State& state, std::int64_t target) {
 }
 
 void Dispatched(benchmark::State& state, pd::StretchKind stretch, bool damage, bool plasticity,
-                bool per_bond, pd::KernelPath path = pd::KernelPath::simd) {
-  pd::Model m = pd::build_model(model_a(stretch, damage, plasticity, per_bond));
+                bool per_bond, pd::KernelPath path = pd::KernelPath::simd,
+                pd::BondModel bond_model = pd::BondModel::micro_elastic) {
+  pd::ModelSpec spec = model_a(stretch, damage, plasticity, per_bond);
+  spec.effects.bond_model = bond_model;
+  pd::Model m = pd::build_model(spec);
   auto forces = pd::make_force_evaluator(m, path);
   const auto y = deformed(m);
   std::vector<double> b(y.size());
@@ -250,6 +254,14 @@ BENCHMARK_CAPTURE(Dispatched, per_bond_field_exact, K::exact, false, false, true
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 BENCHMARK_CAPTURE(Dispatched, all_effects_exact, K::exact, true, true, true)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+BENCHMARK_CAPTURE(Dispatched, fibres, K::exact, false, false, false, pd::KernelPath::simd,
+                  pd::BondModel::virtual_fibres)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+BENCHMARK_CAPTURE(Dispatched, scalar_fibres, K::exact, false, false, false, pd::KernelPath::scalar,
+                  pd::BondModel::virtual_fibres)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 

@@ -11,8 +11,8 @@ import os
 from pathlib import Path
 
 from . import cases as case_files
-from . import (casedetails, distributed, fibres, griffith, integrators, performance, scenes, scorecard,
-               structures, summary)
+from . import (casedetails, distributed, fibres, fracture, griffith, integrators, performance, scenes,
+               scorecard, structures, summary)
 from .fmt import esc
 from .markup import CHECK_SCRIPT, CSS, num_td, table
 from .metrics import metrics
@@ -21,7 +21,7 @@ from .page import Page
 SECTIONS = (("scorecard", "Scorecard"), ("environment", "Environment"), ("summary", "Summary"),
             ("convergence", "Convergence"), ("deflections", "Deflections"),
             ("accuracy", "Accuracy vs time"), ("scenes", "Your scenes"), ("integrators", "Integrators"),
-            ("performance", "Performance"), ("mpi", "MPI"), ("fibres", "Virtual fibres"), ("griffith", "Griffith"), ("cases", "Cases"), ("stages", "Stages"))
+            ("performance", "Performance"), ("mpi", "MPI"), ("fibres", "Virtual fibres"), ("griffith", "Griffith"), ("fracture", "Fracture"), ("cases", "Cases"), ("stages", "Stages"))
 
 
 def page_html(page: Page) -> str:
@@ -29,7 +29,7 @@ def page_html(page: Page) -> str:
     parts = [scorecard.section(page), header(page), summary.section(page), structures.deflections(page),
              structures.accuracy_vs_time(page), scenes.section(page), integrators.section(page),
              performance.section(page), distributed.section(page), fibres.section(page), griffith.section(page),
-             casedetails.section(page), stage_table(page)]
+             fracture.section(page), casedetails.section(page), stage_table(page)]
     body = "\n".join(parts)
     nav = " ".join(f'<a href="#{i}">{t}</a>' for i, t in SECTIONS)
     return (f"<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"

@@ -232,6 +232,13 @@ def main(out: Path) -> int:
                                  beam_lines("cantilever", 70, 1.013),
                                  {"tip": {k: golds["cantilever"]["theory"][k] for k in ("euler_bernoulli", "timoshenko")}},
                                  False)),
+        # A fracture case (the Fracture section lists it), shaped as kalthoff_winkler.cpp writes it.
+        ("kalthoff-winkler", {"case": "kalthoff-winkler", "quantity": "crack angle", "passed": True,
+                              "status": "end_time", "pd": {"angle_degrees": 70.4, "crack_points": 118},
+                              "reference": {"angle_degrees": 70.0},
+                              "error": {"angle_degrees": 0.0061}, "signed_error": {"angle_degrees": 0.0061},
+                              "gate": "the crack leaves the notch tip within 5° of 70°",
+                              "wall_seconds": 2.5}),
     ]
     prow, erow = plate_rows()
     kq = golds["plate-3clamped"]["theory"]["quantities"]

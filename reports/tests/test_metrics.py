@@ -12,8 +12,8 @@ failed sweep, unusable and non-finite values, kernel aggregates, a LAMMPS run). 
   * metrics(records) equals tests/fixtures/metrics-NAME.json, names, order, kinds and values; the
     fixtures were written by the renderer of commit 3785b6a, which still recorded metrics as it
     rendered, so this pins the move; when the synthetic data grew (block-tension,
-    clamped-beam-fast, the cantilever sweep, the old correction pairs) they were rewritten with
-    --write and only gained metrics: every earlier one kept its value;
+    clamped-beam-fast, the cantilever sweep, the old correction pairs, a fracture case) they were
+    rewritten with --write and only gained metrics: every earlier one kept its value;
   * render() writes exactly those metrics into report.json.
 """
 from __future__ import annotations

@@ -61,6 +61,16 @@ class Interrupts(pdcli.TestCase):
             self.check(["run", os.path.join(CASES, "plate-3clamped", "plate-3clamped.yaml"), "-o", out],
                        0.05, 2.5, os.path.join(out, "summary.json"), sig)
 
+    def test_during_set_up(self):
+        """Issue 38: a stop request while pd reads the scene and starts (before the run's own
+        guard) is held for the run, not fatal: exit 5 and a summary, not death by SIGTERM (143).
+        The first tens of milliseconds (the kernel's exec and the dynamic loader) come before
+        any code of pd and cannot be covered."""
+        for k in range(3):
+            out = self.path(f"set-up-{k}")
+            self.check(["run", os.path.join(CASES, "plate-3clamped", "plate-3clamped.yaml"), "-o", out],
+                       0.07, 0.3, os.path.join(out, "summary.json"))
+
     def test_adr_beam(self):
         with open(os.path.join(CASES, "clamped-beam", "clamped-beam.yaml")) as f:
             text = f.read().replace("integrator: static", "integrator: adr")

@@ -3,7 +3,9 @@ take one resolved material, a result without a tolerance is *measured*, an uncon
 is not a verified one, and nonsense gates are refused. Needs pd-fem (PD_FEM, set by CMake)."""
 import json
 import os
+import subprocess
 
+import junit_schema
 import pdcli
 
 
@@ -12,6 +14,78 @@ def load(path):
         return json.load(f)
 
 STATIC = "  force_tolerance: 1e-10\n"
+
+
+BAR = """title: balanced bar
+dimension: 2
+plane: stress
+thickness: 0.01
+lattice:
+  spacing: 0.01
+materials:
+  steel:
+    youngs_modulus: 200e9
+    density: 7800
+bodies:
+  - name: bar
+    material: steel
+    box: [[0, 0], [0.4, 0.1]]
+loads:
+  - name: right
+    box: [[0.39, 0], [0.4, 0.1]]
+    type: total
+    value: [1000, 0]
+  - name: left
+    box: [[0, 0], [0.01, 0.1]]
+    type: total
+    value: LEFT
+solver:
+  integrator: static
+probes:
+  - name: right_end
+    box: [[0.39, 0], [0.4, 0.1]]
+    component: x
+  - name: top_lateral
+    box: [[0.19, 0.09], [0.21, 0.1]]
+    component: y
+"""
+
+
+PARTICLE_PLATE = """title: particle-file plate
+dimension: 2
+plane: stress
+thickness: 0.01
+lattice:
+  spacing: 0.01
+materials:
+  steel:
+    youngs_modulus: 200e9
+    poisson_ratio: 0.3
+    density: 7800
+model:
+  bond_model: virtual-fibres
+bodies:
+  - name: plate
+    material: steel
+    particles: plate.csv
+supports:
+  - name: clamp
+    box: [[0, 0], [0.004, 0.04]]
+    fixed: [x, y]
+loads:
+  - name: pull
+    box: [[0.196, 0], [0.2, 0.04]]
+    type: total
+    value: [100, 0]
+solver:
+  integrator: adr
+  end_time: 1
+  max_steps: 200
+probes:
+  - name: end
+    box: [[0.196, 0], [0.2, 0.04]]
+    component: x
+"""
 
 
 class VerifyVerdicts(pdcli.TestCase):
@@ -61,6 +135,125 @@ class VerifyVerdicts(pdcli.TestCase):
         r, _ = self.verify(scene)
         self.assertEqual(r.returncode, 1, r.stdout + r.stderr)
         self.assertIn("different problems", r.stderr)
+
+    def bar(self, left_value="[-1000, 0]"):
+        """A plane-stress bar held by nothing, pulled by 1 kN at each end (poisson-control's shape)."""
+        scene = self.path("bar.yaml")
+        with open(scene, "w") as f:
+            f.write(BAR.replace("LEFT", left_value))
+        return scene
+
+    def test_a_bar_held_only_by_balanced_loads_verifies(self):
+        r, d = self.verify(self.bar(), "--gate", "0.05")
+        self.assertEqual(r.returncode, 0, r.stdout + r.stderr)
+        self.assertEqual(d["verdict"], "passed", d)
+        probes = {p["name"]: p for p in d["probes"]}
+        # Zero mean rigid motion on both sides: the end moves by F/(EA) times its distance from
+        # the centroid, 5e-6 * 0.195 m, and the top row contracts by ν ε 0.045 m (ν = 1/3).
+        self.assertAlmostEqual(probes["right_end"]["fe"] / (5e-6 * 0.195), 1, delta=0.01)
+        self.assertAlmostEqual(probes["top_lateral"]["fe"] / (-5e-6 * 0.045 / 3), 1, delta=0.01)
+        self.assertLess(abs(probes["right_end"]["relative_difference"]), 0.02)
+
+    def test_a_free_body_under_unbalanced_loads_is_refused_with_what_to_add(self):
+        r, _ = self.verify(self.bar("[-1000, 10]"))
+        self.assertEqual(r.returncode, 1, r.stdout + r.stderr)
+        self.assertIn("not balanced", r.stderr)
+        self.assertIn("add a support", r.stderr)
+
+    def test_junit_has_a_testcase_per_probe_and_validates(self):
+        junit = self.path("verify.xml")
+        r, d = self.verify(self.static_scene(), "--gate", "1e-9", "--junit", junit)
+        self.assertEqual(r.returncode, 2, r.stdout + r.stderr)
+        root = junit_schema.check(junit)
+        suites = root.findall("testsuite")
+        self.assertEqual([s.get("name") for s in suites], ["scene"])
+        cases = {c.get("name"): c for c in suites[0].findall("testcase")}
+        self.assertEqual(set(cases), {"verdict"} | {p["name"] for p in d["probes"]})
+        self.assertIsNone(cases["verdict"].find("failure"))  # same materials, an equilibrium
+        for p in d["probes"]:
+            failure = cases[p["name"]].find("failure")
+            self.assertIsNotNone(failure, p)  # no difference is within 1e-9
+            out = cases[p["name"]].find("system-out").text
+            self.assertIn(f"PD {p['pd']:.9g}", out)
+            self.assertIn(f"FE {p['fe']:.9g}", out)
+            self.assertIn("tolerance", out)
+        self.assertGreater(float(cases["verdict"].get("time")), 0)
+        self.assertEqual(int(root.get("failures")), len(d["probes"]))
+        # Without a gate every probe is measured: skipped, nothing failed.
+        r, d = self.verify(self.static_scene(), "--junit", junit)
+        self.assertEqual(r.returncode, 0, r.stdout + r.stderr)
+        root = junit_schema.check(junit)
+        self.assertEqual(int(root.get("failures")), 0)
+        self.assertEqual(int(root.get("skipped")), len(d["probes"]) + 1)
+        verdict = [c for c in root.iter("testcase") if c.get("name") == "verdict"][0]
+        self.assertEqual(verdict.find("skipped").get("message"), "measured, not judged: no --gate")
+        # A scene that cannot run is an error, recorded.
+        r, _ = self.verify(self.bar("[-1000, 10]"), "--junit", junit)
+        self.assertEqual(r.returncode, 1, r.stdout + r.stderr)
+        root = junit_schema.check(junit)
+        self.assertEqual(int(root.get("errors")), 1)
+
+    def test_a_crack_through_particle_centres_is_refused_where_it_is(self):
+        # The tiny bar's particle rows are at y = 0.005, 0.015, 0.025 (spacing 0.01).
+        def crack(y):
+            return lambda t: t.replace("probes:", f"cracks:\n  - name: c\n    segment: [[0.05, {y}], [0.15, {y}]]\nprobes:")
+        r = self.pd("run", self.static_scene(crack(0.015)), "-o", self.path("row"))
+        self.assertEqual(r.returncode, 1, r.stdout + r.stderr)
+        self.assertIn("crack 'c' runs through the centres of 10 particles (from [0.055, 0.015, 0] to [0.145, 0.015, 0])", r.stderr)
+        self.assertIn("cell faces", r.stderr)
+        self.assertNotIn("is the body held", r.stderr)
+        r = self.pd("run", self.static_scene(crack(0.02)), "-o", self.path("face"))
+        self.assertEqual(r.returncode, 0, r.stdout + r.stderr)
+
+    def test_a_symmetry_plane_through_particle_centres_is_warned_about(self):
+        def plane(x):
+            return lambda t: t.replace("loads:", f"  - name: sym\n    symmetry: {{x: {x}}}\nloads:")
+        r = self.pd("run", self.static_scene(plane(0.195)), "-o", self.path("centres"))
+        self.assertEqual(r.returncode, 0, r.stdout + r.stderr)
+        self.assertIn("symmetry plane x = 0.195 of support 'sym' runs through the centres of 3 particles", r.stderr)
+        r = self.pd("run", self.static_scene(plane(0.2)), "-o", self.path("face"))
+        self.assertEqual(r.returncode, 0, r.stdout + r.stderr)
+        self.assertNotIn("symmetry plane", r.stderr)
+
+    def test_a_crack_of_no_length_is_a_scene_error_in_both_programs(self):
+        scene = self.static_scene(lambda t: t.replace(
+            "probes:", "cracks:\n  - name: dot\n    segment: [[0.1, 0.02], [0.1, 0.02]]\nprobes:"))
+        r = self.pd("run", scene, "-o", self.path("run"))
+        self.assertEqual(r.returncode, 1, r.stdout + r.stderr)
+        self.assertIn("crack 'dot' has no length", r.stderr)
+        fe = subprocess.run([os.environ["PD_FEM"], "--scene", scene, "-o", self.path("fe"), "--coarse"],
+                            capture_output=True, text=True, timeout=120)
+        self.assertEqual(fe.returncode, 1, fe.stdout + fe.stderr)
+        self.assertIn("crack 'dot' has no length", fe.stderr)
+        self.assertNotIn("unknown exception", fe.stderr)
+
+    def test_a_load_box_is_checked_against_a_particle_file_not_the_lattice(self):
+        # 2 mm particles in a scene whose lattice spacing is 10 mm: the end boxes, 4 mm wide,
+        # hold 40 particles each but no lattice point.
+        with open(self.path("plate.csv"), "w") as f:
+            f.write("x,y,volume\n")
+            for i in range(100):
+                for j in range(20):
+                    f.write(f"{(i + 0.5) * 0.002},{(j + 0.5) * 0.002},{0.002 * 0.002 * 0.01}\n")
+        scene = self.scene(text=PARTICLE_PLATE)
+        r = self.pd("run", scene, "-o", self.path("run"), "--threads", "1")
+        self.assertEqual(r.returncode, 0, r.stdout + r.stderr)
+        self.assertNotIn("no particle", r.stderr)
+        summary = load(self.path("run", "summary.json"))
+        self.assertGreater(summary["probes"]["end"] if isinstance(summary["probes"], dict) else 1, 0)
+
+    def test_fe_refinement_stops_before_the_memory_limit(self):
+        scene = os.path.join(os.path.dirname(__file__), "..", "..", "verification", "scenes",
+                             "user", "cantilever-point-load.yaml")
+        env = dict(os.environ, PD_MEMORY_LIMIT="200M")
+        fe = subprocess.run([os.environ["PD_FEM"], "--scene", scene, "-o", self.path("fe"),
+                             "--levels", "6"], capture_output=True, text=True, timeout=300, env=env)
+        self.assertEqual(fe.returncode, 0, fe.stdout + fe.stderr)
+        self.assertIn("refinement stops at", fe.stderr)
+        d = load(self.path("fe", "fe.json"))
+        self.assertLess(len(d["levels"]), 6)
+        self.assertGreaterEqual(len(d["levels"]), 1)
+        self.assertIn("PD_MEMORY_LIMIT", d["refinement_stopped"])
 
     def test_nonsense_gates_and_levels_are_refused(self):
         scene = self.static_scene()

@@ -423,10 +423,34 @@ private:
     }
     static const std::vector<std::string> segments{
         "[[0.05, 0.05], [0.15, 0.05]]", "[[1e6, 1e6], [2e6, 1e6]]", "[[0, 0], [0, 0]]",
-        "[[0, 0, 0], [1, 1, 1]]",       "[[nan, 0], [1, 0]]",       "[[0, 0]]"};
+        "[[0, 0, 0], [1, 1, 1]]",       "[[nan, 0], [1, 0]]",       "[[0, 0]]",
+        "[[0.05, 0.05], [0.05, 0.05]]"};
     YAML::Node crack(YAML::NodeType::Map);
     crack["name"] = "fuzz";
-    crack["segment"] = YAML::Load(choose(segments));
+    const int where = pick(4);
+    const YAML::Node spacing = root["lattice"]["spacing"];
+    const double h = spacing.IsScalar() ? std::atof(spacing.Scalar().c_str()) : 0.0;
+    if (where == 0 && std::isfinite(h) && h > 0) {
+      // Through a row of particle centres (cell-centred lattice at the origin) or along the
+      // cell face beside it: the first must be refused, the second cuts bonds.
+      const double y = (pick(2) == 0 ? 1.5 : 2.0) * h;
+      const bool three = root["dimension"].IsScalar() && root["dimension"].Scalar() == "3";
+      if (three) {
+        crack["polygon"] = YAML::Load(fmt::format(
+            "[[{0}, {1}, {0}], [{2}, {1}, {0}], [{2}, {1}, {2}]]", 0.5 * h, y, 8.5 * h));
+      } else {
+        crack["segment"] = YAML::Load(fmt::format("[[{}, {}], [{}, {}]]", 0.5 * h, y, 8.5 * h, y));
+      }
+    } else if (where == 1) { // 3D: polygons, degenerate ones too
+      static const std::vector<std::string> polygons{
+          "[[0, 0.05, 0], [0.1, 0.05, 0], [0.1, 0.05, 0.1]]", "[[0, 0, 0], [0, 0, 0], [0, 0, 0]]",
+          "[[0, 0, 0], [1, 1, 1], [2, 2, 2]]",
+          "[[0, 0.05, 0], [0.1, 0.05, 0], [0.1, 0.06, 0.1], "
+          "[0, 0.04, 0.1]]"};
+      crack["polygon"] = YAML::Load(choose(polygons));
+    } else {
+      crack["segment"] = YAML::Load(choose(segments));
+    }
     YAML::Node cracks =
         root["cracks"].IsSequence() ? root["cracks"] : YAML::Node(YAML::NodeType::Sequence);
     cracks.push_back(crack);

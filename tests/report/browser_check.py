@@ -129,7 +129,7 @@ def check(dom_text: str, expected_cases: list[str], expect_failed_box: bool) -> 
         problems.append(f"in-page row count {b.get('data-summary-rows')} != {len(expected_cases)}")
     problems += check_scorecard(dom, expected_cases)
     for sec in ("scorecard", "environment", "summary", "convergence", "old-pairs", "deflections", "accuracy",
-                "integrators", "performance", "cases", "stages"):
+                "integrators", "performance", "fracture", "cases", "stages"):
         if sec not in dom.ids:
             problems.append(f"section #{sec} missing")
     if expect_failed_box and not dom.failed_boxes:

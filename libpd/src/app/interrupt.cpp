@@ -16,8 +16,11 @@ namespace pd {
 
 namespace {
 
-std::atomic<int> stop_signal{0}; // lock-free: the one thing a handler may touch
-std::atomic<int> guard_depth{0}; // guards alive; only the main thread makes them
+std::atomic<int> stop_signal{0};  // lock-free: the one thing a handler may touch
+std::atomic<int> guard_depth{0};  // guards alive; only the main thread makes them
+std::atomic<bool> holding{false}; // hold_stop_requests() is in force: requests are kept
+constexpr int stop_signals[] = {SIGINT, SIGTERM, SIGHUP};
+struct sigaction before_holding[3]{};
 
 extern "C" void on_stop_signal(int sig) {
   int none = 0;
@@ -110,7 +113,9 @@ InterruptGuard::InterruptGuard(bool active) : active_(active) {
   if (!outermost_) {
     return;
   }
-  stop_signal.store(0);
+  if (!holding.load()) {
+    stop_signal.store(0);
+  }
   struct sigaction sa {};
   sa.sa_handler = on_stop_signal;
   sigemptyset(&sa.sa_mask);
@@ -138,6 +143,34 @@ bool InterruptGuard::requested() const {
 
 int InterruptGuard::signal() const {
   return active_ ? stop_signal.load() : 0;
+}
+
+void hold_stop_requests() {
+  struct sigaction sa {};
+  sa.sa_handler = on_stop_signal;
+  sigemptyset(&sa.sa_mask);
+  sa.sa_flags = SA_RESTART;
+  sigset_t held;
+  sigemptyset(&held);
+  for (int k = 0; k < 3; ++k) {
+    sigaction(stop_signals[k], &sa, &before_holding[k]);
+    sigaddset(&held, stop_signals[k]);
+  }
+  holding.store(true);
+  // Only now: a signal pending since the restart reaches the handler, not the default action.
+  sigprocmask(SIG_UNBLOCK, &held, nullptr);
+}
+
+void release_stop_requests() {
+  if (!holding.exchange(false)) {
+    return;
+  }
+  for (int k = 0; k < 3; ++k) {
+    sigaction(stop_signals[k], &before_holding[k], nullptr);
+  }
+  if (const int sig = stop_signal.exchange(0); sig != 0) {
+    ::raise(sig);
+  }
 }
 
 AbandonOnInterrupt::AbandonOnInterrupt(std::function<void(int signal)> write)

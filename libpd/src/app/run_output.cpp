@@ -37,6 +37,12 @@ void RunOutputWriter::write_probes(const ProbeHistory& history) {
   last_flush_ = std::chrono::steady_clock::now();
 }
 
+void RunOutputWriter::write_load_curve(const std::string& csv) {
+  if (!dir_.empty()) {
+    write("load_curve.csv", csv);
+  }
+}
+
 void RunOutputWriter::write_final(const Simulation& sim, bool unstable, const ProbeHistory& history,
                                   const Json& summary) {
   if (dir_.empty()) {

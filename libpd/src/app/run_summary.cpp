@@ -18,6 +18,23 @@ std::uint64_t peak_resident_bytes() {
   return 0;
 }
 
+namespace {
+
+/// A fracture run's sections: `quasi_static` (integrator static with damage) and `stop_when`.
+void failure_sections(const Scene& scene, const RunOutcome& out, Json& j) {
+  if (out.quasi_static.is_object()) {
+    j["quasi_static"] = out.quasi_static;
+  }
+  if (scene.stop_when.enabled()) {
+    Json& sj = j["stop_when"];
+    sj["probe"] = scene.stop_when.probe;
+    sj["peak"] = out.stop_peak; // the failure value when status is `failed`
+    sj["peak_time"] = out.stop_peak_time;
+  }
+}
+
+} // namespace
+
 Json run_summary(const Scene& scene, const Simulation& sim, const RunOutcome& out,
                  const RunOptions& options) {
   const Model& model = sim.model();
@@ -107,12 +124,7 @@ Json run_summary(const Scene& scene, const Simulation& sim, const RunOutcome& ou
   for (const auto& [name, count] : out.point_load_particles) {
     j["point_loads"][name]["particles"] = count;
   }
-  if (scene.stop_when.enabled()) {
-    Json& sj = j["stop_when"];
-    sj["probe"] = scene.stop_when.probe;
-    sj["peak"] = out.stop_peak; // the failure value when status is `failed`
-    sj["peak_time"] = out.stop_peak_time;
-  }
+  failure_sections(scene, out, j);
   Json& pj = j["probes"];
   pj = Json::object();
   for (const auto& [name, value] : out.probes) {

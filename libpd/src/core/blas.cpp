@@ -1,5 +1,6 @@
 #include "libpd/core/blas.hpp"
 
+#include <csignal>
 #include <cstdlib>
 #include <dlfcn.h>
 #ifdef _OPENMP
@@ -59,7 +60,17 @@ void restart_with_process_settings(char** argv) {
     changed = true;
   }
   if (changed) {
+    // A stop request between here and the restarted program's handlers would kill it (exec
+    // resets handlers): blocked, it stays pending across exec until pd takes it as a request.
+    sigset_t stop;
+    sigset_t before;
+    sigemptyset(&stop);
+    for (const int sig : {SIGINT, SIGTERM, SIGHUP}) {
+      sigaddset(&stop, sig);
+    }
+    sigprocmask(SIG_BLOCK, &stop, &before);
     execv("/proc/self/exe", argv);
+    sigprocmask(SIG_SETMASK, &before, nullptr);
   }
 }
 

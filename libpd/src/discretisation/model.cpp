@@ -1,6 +1,7 @@
 #include "libpd/discretisation/model.hpp"
 
 #include "libpd/discretisation/bond_cuts.hpp"
+#include "libpd/discretisation/surface_load.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -76,14 +77,20 @@ struct MaterialConstants {
 std::vector<MaterialConstants> material_constants(const ModelSpec& spec) {
   std::vector<MaterialConstants> out;
   const double delta = spec.lattice.horizon();
-  // s0 from G0 assumes uniform bond weights; `gradient` weights store `ratio` times the energy in
-  // the bonds crossing a plane, so s0/√ratio keeps the energy to break them all what the uniform
-  // lattice releases (G0 up to the lattice quadrature of eq. 11's integral). Explicit s0 stays.
+  // s0 from G0 (eq. 11 and its 2D forms) makes the energy stored at s0 across a plane G0. In 2D
+  // it is divided by the lattice's toughness ratio (lattice_toughness.cpp), so that a crack runs
+  // at K_Ic = √(E' G0) whatever the weights and m. Elsewhere: `gradient` weights store `ratio`
+  // times the energy in the bonds crossing a plane, so s0/√ratio keeps that energy what the
+  // uniform lattice releases (the 3D toughness ratio is not derived yet). Explicit s0 stays.
   double stretch_scale = 1.0;
   for (const Material& m : spec.materials) {
-    if (!m.critical_stretch && m.fracture_energy &&
-        spec.volume_correction == VolumeCorrection::gradient) {
-      stretch_scale = 1.0 / std::sqrt(fracture_energy_weight_ratio(spec.corrections()));
+    if (!m.critical_stretch && m.fracture_energy && spec.effects.damage &&
+        spec.effects.bond_model == BondModel::micro_elastic) {
+      if (const auto toughness = lattice_toughness_ratio(spec)) {
+        stretch_scale = 1.0 / *toughness;
+      } else if (spec.volume_correction == VolumeCorrection::gradient) {
+        stretch_scale = 1.0 / std::sqrt(fracture_energy_weight_ratio(spec.corrections()));
+      }
       break;
     }
   }
@@ -483,6 +490,22 @@ std::vector<double> load_force_densities(const ModelSpec& spec, const ParticleSe
     force_density.assign(3 * particles.size(), 0.0);
   }
   for (const LoadSpec& load : spec.loads) {
+    if (load.load.kind == BoxRegionLoad::Kind::pressure) {
+      const SurfaceForces forces =
+          pressure_forces(spec.dimension, spec.lattice.spacing, spec.bodies, particles, body_count,
+                          load.load.surface, load.load.pressure);
+      if (forces.particle.empty()) {
+        throw std::runtime_error("pressure load '" + load.name +
+                                 "' acts on no particle: its surface bounds no body");
+      }
+      for (std::size_t k = 0; k < forces.particle.size(); ++k) {
+        const std::uint32_t i = forces.particle[k];
+        for (std::size_t c = 0; c < 3; ++c) {
+          force_density[3 * i + c] += forces.force[k][c] / particles.volume[i];
+        }
+      }
+      continue;
+    }
     const auto members = load_particles(spec, particles, load, body_count);
     if (members.empty()) {
       throw std::runtime_error("load '" + load.name + "' acts on no particle");
@@ -505,6 +528,8 @@ std::vector<double> load_force_densities(const ModelSpec& spec, const ParticleSe
       case BoxRegionLoad::Kind::per_length:
         density = load.load.value[c] * load.load.measure / total_volume;
         break;
+      case BoxRegionLoad::Kind::pressure:
+        break;
       }
       for (std::uint32_t i : members) {
         force_density[3 * i + c] += density;
@@ -520,6 +545,11 @@ std::vector<std::uint32_t> load_particles(const ModelSpec& spec, const ParticleS
                                           const LoadSpec& load, std::size_t body_count) {
   const int dim = spec.dimension.dim;
   const std::size_t n = std::min(body_count, particles.size());
+  if (load.load.kind == BoxRegionLoad::Kind::pressure) {
+    return pressure_forces(spec.dimension, spec.lattice.spacing, spec.bodies, particles, n,
+                           load.load.surface, load.load.pressure)
+        .particle;
+  }
   if (load.load.kind != BoxRegionLoad::Kind::point) {
     return particles_in(particles, load.load.region, dim, region_tolerance(spec), n);
   }

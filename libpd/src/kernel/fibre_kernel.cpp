@@ -20,10 +20,16 @@
 // runs of the default model are the same instructions as before.
 //
 // Threads split the particle loops statically; each particle's sum runs in CSR order whatever the
-// thread count, so forces are bitwise identical for any number of threads.
+// thread count, so forces are bitwise identical for any number of threads. Elastic arms run on the
+// vectorised passes of simd_fibre_loop.cpp by default (KernelPath::simd); the scalar loops below
+// stay their reference and serve plasticity and damage.
 #include "libpd/kernel/force_kernel.hpp"
+#include "libpd/kernel/simd_bond_loop.hpp"
+#include "libpd/kernel/simd_fibre_loop.hpp"
 
 #include <cmath>
+#include <cstdint>
+#include <limits>
 #include <stdexcept>
 #include <vector>
 
@@ -34,7 +40,8 @@ namespace {
 template <bool Plastic, bool Damage>
 class FibreEvaluator final : public ForceEvaluator {
 public:
-  explicit FibreEvaluator(Model& model) : model_(model) {
+  /// `simd`: run the vectorised passes (elastic arms only; the caller checks).
+  FibreEvaluator(Model& model, bool simd) : model_(model), simd_(simd) {
     const FibreArms& a = model.fibre_arms;
     const BondFamily& f = model.family;
     // (1/N) A_k |ξ_k|: the weight of arm k in its particle's mean strain.
@@ -43,9 +50,29 @@ public:
       mean_weight_[k] = a.own[k] / (f.inverse_length[k] * a.dim);
     }
     mean_strain_.assign(model.size(), 0.0);
+    if (simd_) {
+      mean_term_.assign(model.size(), 0.0);
+      mean_rows_ = kernel::simd_fibre_mean_rows();
+      force_rows_ = kernel::simd_fibre_force_rows();
+      path_ = "simd/" + kernel::simd_target_name();
+    }
   }
 
   void compute(const double* y, double* b) override {
+    if (simd_) {
+      const FibreArms& a = model_.fibre_arms;
+      const BondFamily& f = model_.family;
+      const kernel::FibreData d{f.offsets.data(),    f.neighbour.data(),  f.inverse_length.data(),
+                                mean_weight_.data(), a.own.data(),        a.other.data(),
+                                a.shear.data(),      a.volumetric.data(), mean_term_.data()};
+      kernel::for_row_ranges(d.offsets, model_.size(), [&](std::size_t first, std::size_t last) {
+        mean_rows_(d, y, b, first, last);
+      });
+      kernel::for_row_ranges(d.offsets, model_.size(), [&](std::size_t first, std::size_t last) {
+        force_rows_(d, y, b, first, last);
+      });
+      return;
+    }
     const auto& start = model_.state.plastic_stretch_at_increment_start;
     plastic_start_ = start.size() == model_.family.directed_bond_count() ? start.data() : nullptr;
     mean_strains(y);
@@ -84,7 +111,7 @@ public:
 
   std::string description() const override {
     return std::string("bond-model=virtual-fibres strain=exact plasticity=") +
-           (Plastic ? "on" : "off") + " damage=" + (Damage ? "on" : "off") + " path=scalar";
+           (Plastic ? "on" : "off") + " damage=" + (Damage ? "on" : "off") + " path=" + path_;
   }
 
 private:
@@ -189,22 +216,27 @@ private:
   }
 
   Model& model_;
+  bool simd_;
   std::vector<double> mean_weight_;       ///< A_k |ξ_k| / N per directed bond
   std::vector<double> mean_strain_;       ///< ε̄ per particle, pass 1's result
+  std::vector<double> mean_term_;         ///< (NK − G(N+2)) ε̄ per particle, the SIMD pass 1's
+  kernel::FibreRows mean_rows_ = nullptr; ///< the SIMD passes, when simd_
+  kernel::FibreRows force_rows_ = nullptr;
+  std::string path_ = "scalar";
   const double* plastic_start_ = nullptr; ///< ε^p at the increment's start, in quasi-static runs
 };
 
 template <bool Plastic>
 std::unique_ptr<ForceEvaluator> with_damage(Model& m) {
   if (m.effects.damage) {
-    return std::make_unique<FibreEvaluator<Plastic, true>>(m);
+    return std::make_unique<FibreEvaluator<Plastic, true>>(m, false);
   }
-  return std::make_unique<FibreEvaluator<Plastic, false>>(m);
+  return std::make_unique<FibreEvaluator<Plastic, false>>(m, false);
 }
 
 } // namespace
 
-std::unique_ptr<ForceEvaluator> make_fibre_evaluator(Model& model) {
+std::unique_ptr<ForceEvaluator> make_fibre_evaluator(Model& model, KernelPath path) {
   const std::size_t nb = model.family.directed_bond_count();
   if (model.fibre_arms.own.size() != nb) {
     throw std::logic_error("virtual fibres without arm weights: build the model with build_model");
@@ -222,7 +254,14 @@ std::unique_ptr<ForceEvaluator> make_fibre_evaluator(Model& model) {
       (model.state.broken.size() != nb || model.field.bond_critical_stretch.size() != nb)) {
     throw std::logic_error("damage effect without bond state: build the model with build_model");
   }
-  return model.effects.plasticity ? with_damage<true>(model) : with_damage<false>(model);
+  if (model.effects.plasticity) {
+    return with_damage<true>(model);
+  }
+  // The SIMD passes gather with 32-bit signed indices.
+  const bool simd =
+      path == KernelPath::simd &&
+      model.size() <= static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max());
+  return std::make_unique<FibreEvaluator<false, false>>(model, simd);
 }
 
 } // namespace pd

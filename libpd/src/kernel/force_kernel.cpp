@@ -2,14 +2,9 @@
 
 #include "libpd/kernel/simd_bond_loop.hpp"
 
-#include <algorithm>
 #include <cstdint>
 #include <fmt/format.h>
 #include <limits>
-
-#ifdef _OPENMP
-#include <omp.h>
-#endif
 
 namespace pd {
 
@@ -49,29 +44,9 @@ public:
       return;
     }
     const KernelData d = kernel_data(model_);
-    const std::size_t n = d.particles;
-    const std::size_t bonds = d.offsets[n];
-#pragma omp parallel if (bonds >= kernel::simd_parallel_min_bonds)
-    {
-      std::size_t first = 0, last = n;
-#ifdef _OPENMP
-      // Contiguous particle ranges with equal bond counts (irregular sets balance too); each
-      // particle's result does not depend on which thread computes it.
-      const auto t = static_cast<std::size_t>(omp_get_thread_num());
-      const auto threads = static_cast<std::size_t>(omp_get_num_threads());
-      const auto split = [&](std::size_t part) {
-        if (part >= threads) {
-          return n;
-        }
-        const std::size_t target = bonds / threads * part + bonds % threads * part / threads;
-        return static_cast<std::size_t>(std::lower_bound(d.offsets, d.offsets + n, target) -
-                                        d.offsets);
-      };
-      first = split(t);
-      last = split(t + 1);
-#endif
+    kernel::for_row_ranges(d.offsets, d.particles, [&](std::size_t first, std::size_t last) {
       simd_(d, y, b, first, last);
-    }
+    });
   }
 
   double strain_energy(const double* y) const override {
@@ -150,7 +125,7 @@ std::unique_ptr<ForceEvaluator> pick_law(Model& m, kernel::RowKernel simd) {
 
 std::unique_ptr<ForceEvaluator> make_force_evaluator(Model& m, KernelPath path) {
   if (m.effects.bond_model == BondModel::virtual_fibres) {
-    return make_fibre_evaluator(m); // its own kernel (src/kernel/fibre_kernel.cpp), one path
+    return make_fibre_evaluator(m, path); // its own kernel (src/kernel/fibre_kernel.cpp)
   }
   if (m.effects.damage && m.state.broken.size() != m.family.directed_bond_count()) {
     throw std::logic_error("damage effect without bond state: build the model with build_model");

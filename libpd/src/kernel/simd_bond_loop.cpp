@@ -49,6 +49,7 @@ struct TailBlock {
   alignas(64) double plastic[virtual_lanes];
   alignas(64) std::uint8_t broken[virtual_lanes];
 };
+static_assert(virtual_lanes == sizeof(std::uint64_t), "a block's flags are tested as one word");
 
 } // namespace pd::kernel::detail
 #endif
@@ -129,10 +130,12 @@ HWY_NOINLINE void mark_broken(M breaks, std::uint8_t* broken) {
 }
 
 /// The bonds of one block (kU vectors); `valid` bonds of it exist (kN·kU for a full block).
-/// Adds to the per-virtual-lane sums and returns how many valid bonds are broken.
-template <class Stretch, class Law, bool Damage, class Field, bool Full>
+/// Adds to the per-virtual-lane sums and returns how many valid bonds are broken. `Intact`: the
+/// caller has seen that no bond of this (full) block is broken yet, so the flags are not read.
+template <class Stretch, class Law, bool Damage, class Field, bool Full, bool Intact = false>
 HWY_INLINE std::size_t block(const KernelData& kd, const double* y, V yi0, V yi1, V yi2,
                              const BlockPointers& p, std::size_t valid, V (&acc)[3][kU]) {
+  static_assert(Full || !Intact, "only a full block is tested for intact bonds");
   const D d;
   const hn::Rebind<std::int32_t, D> di32;
   const hn::Rebind<std::uint8_t, D> du8;
@@ -140,7 +143,7 @@ HWY_INLINE std::size_t block(const KernelData& kd, const double* y, V yi0, V yi1
   for (std::size_t u = 0; u < kU; ++u) {
     const std::size_t o = u * kN;
     M active = Full ? hn::FirstN(d, kN) : hn::FirstN(d, valid > o ? valid - o : 0);
-    if constexpr (Damage) {
+    if constexpr (Damage && !Intact) {
       const V was = hn::PromoteTo(d, hn::PromoteTo(di32, hn::LoadU(du8, p.broken + o)));
       const M was_broken = hn::And(active, hn::Gt(was, hn::Zero(d)));
       broken_count += hn::CountTrue(d, was_broken);
@@ -193,7 +196,11 @@ HWY_INLINE std::size_t block(const KernelData& kd, const double* y, V yi0, V yi1
 }
 
 template <class Stretch, class Law, bool Damage, class Field>
-void rows(const KernelData& kd, const double* y, double* b, std::size_t first, std::size_t last) {
+void rows(const KernelData& kd_in, const double* y, double* b, std::size_t first,
+          std::size_t last) {
+  // A local copy: the flag stores (uint8_t, which may alias anything) and the out-of-line
+  // mark_broken would otherwise make GCC reload every field of `kd_in` in each block.
+  const KernelData kd = kd_in;
   const D d;
   static_assert(sizeof(std::int32_t) == sizeof(std::uint32_t));
   // Indices are < 2^31 (particle counts are checked against this in make_force_evaluator).
@@ -219,6 +226,17 @@ void rows(const KernelData& kd, const double* y, double* b, std::size_t first, s
                                                                 : nullptr,
                             Law::has_history ? kd.plastic_stretch + k : nullptr,
                             Damage ? kd.broken + k : nullptr};
+      if constexpr (Damage) {
+        // Nearly every block of a run has no broken bond: one 8-byte test replaces the widening
+        // and counting of the flags lane by lane.
+        std::uint64_t flags = 0;
+        std::memcpy(&flags, kd.broken + k, sizeof flags);
+        if (flags == 0) {
+          broken_count += block<Stretch, Law, Damage, Field, true, true>(kd, y, yi0, yi1, yi2, p,
+                                                                         virtual_lanes, acc);
+          continue;
+        }
+      }
       broken_count +=
           block<Stretch, Law, Damage, Field, true>(kd, y, yi0, yi1, yi2, p, virtual_lanes, acc);
     }

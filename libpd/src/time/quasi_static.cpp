@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <fmt/format.h>
+#include <stdexcept>
 
 namespace pd::quasi_static {
 
@@ -179,7 +180,200 @@ Outcome run_static(Model& model, const SolverSpec& scene_solver, const InitialSp
   return out;
 }
 
+/// While alive the force kernel breaks no bond (s0 is no_limit, uniform and per bond):
+/// run_fracture decides which bonds break. The destructor puts the model's values back.
+class HeldStrength {
+public:
+  explicit HeldStrength(Model& m)
+      : m_(m), uniform_(m.field.critical_stretch), per_bond_(m.field.bond_critical_stretch) {
+    m_.field.critical_stretch = no_limit;
+    std::fill(m_.field.bond_critical_stretch.begin(), m_.field.bond_critical_stretch.end(),
+              no_limit);
+  }
+  ~HeldStrength() {
+    m_.field.critical_stretch = uniform_;
+    std::copy(per_bond_.begin(), per_bond_.end(), m_.field.bond_critical_stretch.begin());
+  }
+  HeldStrength(const HeldStrength&) = delete;
+  HeldStrength& operator=(const HeldStrength&) = delete;
+  double s0(std::size_t k) const { return per_bond_.empty() ? uniform_ : per_bond_[k]; }
+
+private:
+  Model& m_;
+  double uniform_;
+  std::vector<double> per_bond_;
+};
+
+/// s/s0 of every directed bond at positions y, as the force kernel measures s (0 for a broken
+/// bond), and the energy bond k stored, V_i · ½ c_k w(s), the kernel's strain_energy term.
+template <class Stretch>
+struct BondMeasure {
+  static void ratios(const Model& m, const double* y, const HeldStrength& held,
+                     std::vector<double>& ratio) {
+    for (std::size_t i = 0; i < m.size(); ++i) {
+      for (std::size_t k = m.family.offsets[i]; k < m.family.offsets[i + 1]; ++k) {
+        ratio[k] = m.state.broken[k] ? 0.0 : stretch(m, y, i, k).stretch / held.s0(k);
+      }
+    }
+  }
+  static double energy(const Model& m, const double* y, std::size_t i, std::size_t k) {
+    const double c = m.field.per_bond() ? m.field.bond_stiffness[k] : m.field.stiffness;
+    return 0.5 * m.particles.volume[i] * c *
+           Stretch::bond_energy(distance_squared(y, i, m.family.neighbour[k]),
+                                m.family.inverse_length[k]);
+  }
+  static double distance_squared(const double* y, std::size_t i, std::size_t j) {
+    double r2 = 0;
+    for (int c = 0; c < 3; ++c) {
+      const double d = y[3 * j + c] - y[3 * i + c];
+      r2 += d * d;
+    }
+    return r2;
+  }
+  static StretchResult stretch(const Model& m, const double* y, std::size_t i, std::size_t k) {
+    return Stretch::evaluate(distance_squared(y, i, m.family.neighbour[k]),
+                             m.family.inverse_length[k]);
+  }
+};
+
+template <class Visit>
+auto with_measure(StretchKind kind, Visit&& visit) {
+  switch (kind) {
+  case StretchKind::modified:
+    return visit(BondMeasure<ModifiedStretch>{});
+  case StretchKind::fast:
+    return visit(BondMeasure<FastStretch>{});
+  case StretchKind::exact:
+    break;
+  }
+  return visit(BondMeasure<ExactStretch>{});
+}
+
+/// Bonds whose s/s0 is within this fraction of the largest break together: the two tips of a
+/// symmetric crack reach s0 together to the solve's accuracy (Newton stops at 1e-6 of the load),
+/// and which of them broke first would otherwise be decided by round-off.
+constexpr double break_group_tolerance = 1e-6;
+
 } // namespace
+
+FractureOutcome run_fracture(Simulation& sim, Model& model, const FractureSettings& settings,
+                             const FractureObserver& observer) {
+  FractureOutcome out;
+  const std::vector<double> full = take_prescribed_values(model);
+  const std::vector<double> full_load = model.external_force_density;
+  const HeldStrength held(model);
+  std::vector<double> ratio(model.family.neighbour.size(), 0.0);
+  const auto set_level = [&](double fraction) {
+    set_constraint_level(model, full, fraction);
+    for (std::size_t d = 0; d < full_load.size(); ++d) {
+      model.external_force_density[d] = fraction * full_load[d];
+    }
+  };
+  // Equilibrium at `fraction`; false where there is none with the bonds left (the static solve
+  // did not converge or its displacement blew up): after bonds broke, the specimen failed.
+  const auto solve = [&](double fraction) {
+    set_level(fraction);
+    const RunResult r = sim.run();
+    ++out.solves;
+    const Json summary = sim.integrator().summary();
+    const Json* solves = summary.find("solves");
+    const Json* converged = summary.find("converged_solves");
+    const bool ok = r.status == RunStatus::converged && solves && converged &&
+                    solves->number() == converged->number();
+    if (!ok && out.bonds_broken == 0) {
+      throw std::runtime_error(fmt::format(
+          "quasi-static fracture: the static solve at load factor {:.6g} failed before any bond "
+          "broke: {}",
+          fraction, r.message.empty() ? sim.integrator().report() : r.message));
+    }
+    if (!ok) {
+      out.end = FractureOutcome::End::no_equilibrium;
+      out.message = fmt::format(
+          "no equilibrium at load factor {:.6g} after {} bonds broke: the specimen failed "
+          "(largest load factor in equilibrium {:.6g}; the final state is the broken specimen "
+          "unloaded)",
+          fraction, out.bonds_broken, out.peak_load_factor);
+      // The failed solve's state is meaningless (a loose piece under load has no finite
+      // displacement); the broken specimen without load has one, and the run's files show it.
+      set_level(0);
+      sim.run();
+      ++out.solves;
+    }
+    return ok;
+  };
+  const auto largest_ratio = [&]() {
+    with_measure(model.effects.stretch, [&](auto m) {
+      m.ratios(model, sim.state().position.data(), held, ratio);
+      return 0;
+    });
+    return ratio.empty() ? 0.0 : *std::max_element(ratio.begin(), ratio.end());
+  };
+  const auto stop = [&](const char* why) {
+    out.end = FractureOutcome::End::stopped;
+    out.message = why;
+  };
+  for (std::size_t level = 1; level <= settings.levels.size(); ++level) {
+    const double target = settings.levels[level - 1];
+    for (;;) {
+      if (settings.stop_requested && settings.stop_requested()) {
+        stop("stopped by a request (signal)");
+        return out;
+      }
+      if (!solve(target)) {
+        return out;
+      }
+      const double r = largest_ratio();
+      if (r <= 1) {
+        break;
+      }
+      // The bonds' stretches are linear in the level while no bond breaks: the most overstretched
+      // bond is at s0 at target / r. Solved there, not scaled, so that every probe (damage too)
+      // and the stored energies are those of an equilibrium.
+      const double critical = target / r;
+      if (!solve(critical)) {
+        return out;
+      }
+      const double rc = largest_ratio();
+      out.peak_load_factor = std::max(out.peak_load_factor, critical);
+      FracturePoint point{level, critical, true, out.bonds_broken, out.dissipated_energy, 0};
+      std::vector<std::size_t> breaking;
+      for (std::size_t k = 0; k < ratio.size(); ++k) {
+        if (ratio[k] > 0 && ratio[k] >= rc * (1 - break_group_tolerance)) {
+          breaking.push_back(k);
+        }
+      }
+      if (breaking.empty()) { // rc ≤ 0: the level's stretch was not linear in it
+        throw std::logic_error(fmt::format(
+            "quasi-static fracture: no bond at s0 at the critical load factor {:.6g}", critical));
+      }
+      point.breaking = breaking.size();
+      if (!observer(sim, point)) {
+        stop("stopped by the observer");
+        return out;
+      }
+      const double* y = sim.state().position.data();
+      std::size_t row = 0;
+      for (std::size_t k : breaking) {
+        while (model.family.offsets[row + 1] <= k) {
+          ++row;
+        }
+        out.dissipated_energy +=
+            with_measure(model.effects.stretch, [&](auto m) { return m.energy(model, y, row, k); });
+        model.state.broken[k] = 1;
+      }
+      // Directed bonds: each pair is counted once, as broken_bonds counts.
+      out.bonds_broken = broken_bonds(model);
+      ++out.break_events;
+    }
+    out.peak_load_factor = std::max(out.peak_load_factor, target);
+    const FracturePoint point{level, target, false, out.bonds_broken, out.dissipated_energy, 0};
+    if (!observer(sim, point)) {
+      stop("stopped by the observer");
+      return out;
+    }
+  }
+  return out;
+}
 
 Outcome run(Model& model, const SolverSpec& scene_solver, const InitialSpec& initial,
             const Settings& settings, const IncrementObserver& after_increment) {

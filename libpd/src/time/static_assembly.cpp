@@ -81,6 +81,86 @@ DofMap map_dofs(const Model& m, const ExtrapolatedParticles& e) {
 
 namespace {
 
+Vec3 minus(const Vec3& p, const Vec3& q) {
+  return {p[0] - q[0], p[1] - q[1], p[2] - q[2]};
+}
+
+Vec3 cross(const Vec3& p, const Vec3& q) {
+  return {p[1] * q[2] - p[2] * q[1], p[2] * q[0] - p[0] * q[2], p[0] * q[1] - p[1] * q[0]};
+}
+
+} // namespace
+
+std::vector<std::size_t> rigid_motion_pins(const Model& m) {
+  // A support may hold the body without constraints (a quadratic clamp extrapolates its
+  // particles): the scene's supports decide.
+  if (!m.spec.supports.empty() || !m.constraints.empty() || m.body_particle_count() < 3) {
+    return {};
+  }
+  const int dim = m.spec.dimension.dim;
+  // Body particles only: ghosts (extrapolated, after them) follow their sources.
+  const std::vector<Vec3> x(m.particles.position.begin(),
+                            m.particles.position.begin() +
+                                static_cast<std::ptrdiff_t>(m.body_particle_count()));
+  const auto dominant = [dim](const Vec3& v) {
+    int k = 0;
+    for (int a = 1; a < dim; ++a) {
+      k = std::abs(v[a]) > std::abs(v[k]) ? a : k;
+    }
+    return static_cast<std::size_t>(k);
+  };
+  const auto farthest = [&](const auto& distance) {
+    std::size_t best = 0;
+    for (std::size_t i = 1; i < x.size(); ++i) {
+      best = distance(x[i]) > distance(x[best]) ? i : best;
+    }
+    return best;
+  };
+  // A: the lexicographically smallest position, a corner of a box-shaped body.
+  const std::size_t a =
+      static_cast<std::size_t>(std::min_element(x.begin(), x.end(),
+                                                [](const Vec3& p, const Vec3& q) {
+                                                  return std::lexicographical_compare(
+                                                      p.begin(), p.end(), q.begin(), q.end());
+                                                }) -
+                               x.begin());
+  const std::size_t b =
+      farthest([&](const Vec3& p) { return dot(minus(p, x[a]), minus(p, x[a])); });
+  const Vec3 ab = minus(x[b], x[a]);
+  std::vector<std::size_t> pins;
+  for (std::size_t c = 0; c < static_cast<std::size_t>(dim); ++c) {
+    pins.push_back(3 * a + c);
+    if (c != dominant(ab)) {
+      pins.push_back(3 * b + c);
+    }
+  }
+  if (dim == 3) {
+    const std::size_t c = farthest([&](const Vec3& p) {
+      const Vec3 n = cross(ab, minus(p, x[a]));
+      return dot(n, n);
+    });
+    pins.push_back(3 * c + dominant(cross(ab, minus(x[c], x[a]))));
+  }
+  return pins;
+}
+
+void pin_dofs(DofMap& d, const std::vector<std::size_t>& dofs) {
+  for (const std::size_t g : dofs) {
+    d.kind[g] = 1;
+    d.prescribed[g] = 0.0;
+  }
+  d.free_dofs.clear();
+  std::fill(d.free_index.begin(), d.free_index.end(), DofMap::none);
+  for (std::size_t g = 0; g < d.kind.size(); ++g) {
+    if (d.kind[g] == 0) {
+      d.free_index[g] = static_cast<std::ptrdiff_t>(d.free_dofs.size());
+      d.free_dofs.push_back(g);
+    }
+  }
+}
+
+namespace {
+
 using Block = std::array<double, 9>; // row-major 3×3
 
 /// One block of A or B between a particle and an unknown particle: a weight per component.

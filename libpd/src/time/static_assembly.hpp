@@ -39,6 +39,17 @@ inline DofMap map_dofs(const Model& m) {
   return map_dofs(m, m.extrapolated);
 }
 
+/// A body no support holds (the scene has none) is free to move rigidly: K
+/// is singular. These global dofs, held at zero, remove exactly the rigid motions and nothing
+/// else: a particle A (every component), the particle B farthest from it (the components across
+/// AB) and, in 3D, the particle C farthest from the line AB (the component along the normal of
+/// ABC). Under balanced loads they carry no reaction, so the solution is one of the free body's;
+/// empty where the model has supports.
+std::vector<std::size_t> rigid_motion_pins(const Model& m);
+
+/// Holds `dofs` at zero in `d`: prescribed, no longer unknowns.
+void pin_dofs(DofMap& d, const std::vector<std::size_t>& dofs);
+
 /// Which entries of each row the assembly keeps.
 enum class RowPart {
   full,       ///< every column

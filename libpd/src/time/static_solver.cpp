@@ -36,11 +36,13 @@
 // re-solve; that needs a factorisation per bond (the beam breaks 5,400 in its first increment).
 // Breaking all at once is the cheaper approximation, and it can overshoot: a bond broken in the
 // same event as the one that overloaded it might have unloaded had they broken in turn
-// (docs/theory/quasi-brittle.md measures what this does on rc-beam). During Newton the kernel
-// must neither break bonds nor drop the force of a bond beyond s0 (an iterate is not an
-// equilibrium): s0 is lifted to no_limit while Newton runs (BreakingSuspended), so the residual
-// is the elastic one of the unbroken bonds. Restoring only the broken flags after each
-// evaluation is not enough: a bond beyond s0 still carries no force in that evaluation, and
+// (docs/theory/quasi-brittle.md measures what this does on rc-beam). A scene's quasi-static
+// fracture (quasi_static::run_fracture) breaks them in turn instead: it holds the kernel's s0
+// itself, so each step here is one solve, and it chooses the bond and the load of each break.
+// During Newton the kernel must neither break bonds nor drop the force of a bond beyond s0 (an
+// iterate is not an equilibrium): s0 is lifted to no_limit while Newton runs (BreakingSuspended),
+// so the residual is the elastic one of the unbroken bonds. Restoring only the broken flags after
+// each evaluation is not enough: a bond beyond s0 still carries no force in that evaluation, and
 // Newton converged to states whose overstretched bonds carried nothing — measured on rc-beam,
 // one event then broke all 134,557 concrete bonds at 0.25 mm, where ADR breaks 5,300.
 #include "libpd/time/static_solver.hpp"
@@ -55,6 +57,7 @@
 #include "sparse_factorisation.hpp"
 #include "static_assembly.hpp"
 
+#include <Eigen/Dense>
 #include <Eigen/SparseCore>
 #include <algorithm>
 #include <chrono>
@@ -219,6 +222,8 @@ private:
     bool exact = true;
     double asymmetry = 0;
     std::size_t nonzeros = 0;
+    /// The dofs held to remove a free body's rigid motion (rigid_motion_pins), or none.
+    std::vector<std::size_t> pins;
     double check_seconds = 0, assembly_seconds = 0, factorisation_seconds = 0;
   };
 
@@ -234,11 +239,18 @@ private:
     // like K (any A gives a positive semi-definite Aᵀ (V K) A, and the body's bonds and supports
     // make it definite), and close to K in energy, so that conjugate gradients on K converge in a
     // few iterations with P as preconditioner (solve). K itself is applied matrix-free.
+    f.pins = rigid_motion_pins(model_);
+    if (!f.pins.empty()) {
+      require_balanced_loads();
+    }
     f.dofs = map_dofs(model_);
     if (allow_preconditioner && !model_.extrapolated.empty() && f.dofs.every_dependant_folds() &&
         f.dofs.free_dofs.size() >= preconditioned_from_unknowns) {
       f.dofs = map_dofs(model_, refit_extrapolation(model_, preconditioner_fit_radius));
       f.exact = false;
+    }
+    if (!f.pins.empty()) {
+      pin_dofs(f.dofs, f.pins);
     }
     const DofMap& d = f.dofs;
     const auto n = static_cast<Eigen::Index>(d.free_dofs.size());
@@ -250,6 +262,7 @@ private:
     f.symmetric = f.folds && f.asymmetry <= 1e-12;
     if (!f.exact && !f.symmetric) { // V K itself is not symmetric: K, for UMFPACK
       f.dofs = map_dofs(model_);
+      pin_dofs(f.dofs, f.pins);
       f.exact = true;
     }
     const auto t_check = clock::now();
@@ -309,6 +322,9 @@ private:
       fell_back_ = true;
       f = factor_system(false);
       attempt(st, f);
+    }
+    if (!f.pins.empty()) {
+      remove_rigid_motion(st);
     }
     // With damage a solve that did not converge is reported (converged_solves) rather than
     // thrown: the break event that follows changes the problem, and a load-stepping driver
@@ -426,6 +442,102 @@ private:
     return newton_converged_;
   }
 
+  /// A body no support holds has an equilibrium only under loads of zero resultant and zero
+  /// moment (a bar pulled at both ends); otherwise it would accelerate, and the pins would
+  /// carry the difference as reactions the scene does not have.
+  void require_balanced_loads() const {
+    const std::vector<double>& ext = model_.external_force_density;
+    if (ext.empty()) {
+      return;
+    }
+    const auto& x = model_.particles.position;
+    const auto& v = model_.particles.volume;
+    Vec3 force{0, 0, 0}, moment{0, 0, 0}, centre{0, 0, 0};
+    double total = 0, scale = 0, volume = 0, size = 0;
+    for (std::size_t i = 0; i < model_.body_particle_count(); ++i) {
+      volume += v[i];
+      for (std::size_t a = 0; a < 3; ++a) {
+        centre[a] += v[i] * x[i][a];
+      }
+    }
+    for (double& c : centre) {
+      c /= volume;
+    }
+    for (std::size_t i = 0; i < model_.body_particle_count(); ++i) {
+      const Vec3 f{v[i] * ext[3 * i], v[i] * ext[3 * i + 1], v[i] * ext[3 * i + 2]};
+      const Vec3 r{x[i][0] - centre[0], x[i][1] - centre[1], x[i][2] - centre[2]};
+      for (std::size_t a = 0; a < 3; ++a) {
+        force[a] += f[a];
+      }
+      moment[0] += r[1] * f[2] - r[2] * f[1];
+      moment[1] += r[2] * f[0] - r[0] * f[2];
+      moment[2] += r[0] * f[1] - r[1] * f[0];
+      total += norm(f);
+      size = std::max(size, norm(r));
+    }
+    scale = total;
+    // Each load's resultant is exact to round-off (shared in proportion to volume), so balanced
+    // loads cancel to many digits; 1e-9 of the loads' magnitude leaves room for the sums.
+    const double tolerance = 1e-9;
+    if (norm(force) > tolerance * scale || norm(moment) > tolerance * scale * size) {
+      throw std::runtime_error(fmt::format(
+          "static solve: no support holds the body and its loads are not balanced (resultant "
+          "[{:.4g}, {:.4g}, {:.4g}] N, moment about the centroid [{:.4g}, {:.4g}, {:.4g}] N m), "
+          "so it has no equilibrium: add a support (e.g. a fixed box) or balance the loads",
+          force[0], force[1], force[2], moment[0], moment[1], moment[2]));
+    }
+  }
+
+  /// A free body's solution is defined up to a rigid motion; the one reported has none in the
+  /// mean: zero volume-weighted mean displacement and rotation about the centroid (the L2
+  /// projection off the rigid motions, which is what the FE reference, pd-fem --scene, does too,
+  /// so that both report the same displacements).
+  void remove_rigid_motion(State& st) {
+    const auto& x = model_.particles.position;
+    const auto& v = model_.particles.volume;
+    const std::size_t body = model_.body_particle_count(); // ghosts follow their sources
+    double* y = st.position.data();
+    Eigen::Vector3d centre = Eigen::Vector3d::Zero(), mean = Eigen::Vector3d::Zero();
+    double volume = 0;
+    for (std::size_t i = 0; i < body; ++i) {
+      volume += v[i];
+      for (std::size_t a = 0; a < 3; ++a) {
+        centre[static_cast<Eigen::Index>(a)] += v[i] * x[i][a];
+        mean[static_cast<Eigen::Index>(a)] += v[i] * (y[3 * i + a] - x[i][a]);
+      }
+    }
+    centre /= volume;
+    mean /= volume;
+    // J ω = Σ V r × u with J = Σ V (|r|² I − r rᵀ): the rotation that best fits u − mean.
+    Eigen::Matrix3d inertia = Eigen::Matrix3d::Zero();
+    Eigen::Vector3d torque = Eigen::Vector3d::Zero();
+    for (std::size_t i = 0; i < body; ++i) {
+      const Eigen::Vector3d r = Eigen::Vector3d(x[i][0], x[i][1], x[i][2]) - centre;
+      const Eigen::Vector3d u =
+          Eigen::Vector3d(y[3 * i] - x[i][0], y[3 * i + 1] - x[i][1], y[3 * i + 2] - x[i][2]) -
+          mean;
+      inertia += v[i] * (r.squaredNorm() * Eigen::Matrix3d::Identity() - r * r.transpose());
+      torque += v[i] * r.cross(u);
+    }
+    Eigen::Vector3d omega = Eigen::Vector3d::Zero();
+    if (model_.spec.dimension.dim == 3) {
+      omega = inertia.ldlt().solve(torque);
+    } else if (model_.spec.dimension.dim == 2) {
+      omega[2] = torque[2] / inertia(2, 2);
+    }
+    const auto dim = static_cast<std::size_t>(model_.spec.dimension.dim);
+    for (std::size_t i = 0; i < body; ++i) {
+      const Eigen::Vector3d r = Eigen::Vector3d(x[i][0], x[i][1], x[i][2]) - centre;
+      const Eigen::Vector3d rigid = mean + omega.cross(r);
+      for (std::size_t a = 0; a < dim; ++a) {
+        y[3 * i + a] -= rigid[static_cast<Eigen::Index>(a)];
+      }
+    }
+    apply_constraints(model_, LoadRamp{}, 0.0, y, nullptr);
+    forces_.compute(y, st.force.data()); // st.force is b at the state returned
+    ++force_evaluations_;
+  }
+
   /// The residual is measured as Simulation::force_balance measures it for dynamic relaxation:
   /// against the applied loads (full_load_norm), or, where only displacements are prescribed,
   /// the reactions of the current state (K u_p, the linearised load, is far larger: a bar's
@@ -469,17 +581,20 @@ private:
     j["newton_cg_iterations"] = cg_iterations_;
     j["residual"] = residual;
     j["round_off_floor"] = floor;
+    // No support: the rigid motion is removed (remove_rigid_motion).
+    j["free_body"] = !f.pins.empty();
     report_ = fmt::format(
         "static solve: {} unknowns, {} nonzeros, {} ({} operator, {} = {:.1e}); "
         "assembly {:.3f} s, symmetry check {:.3f} s, factorisation {:.3f} s "
         "(analysis {:.3f} s; factor {} nonzeros, {:.1f} MiB), {} Newton iterations "
-        "{:.3f} s, residual {:.2e} of the load or reactions (round-off floor {:.1e})",
+        "{:.3f} s, residual {:.2e} of the load or reactions (round-off floor {:.1e}){}",
         f.dofs.free_dofs.size(), f.nonzeros, factor.name(),
         f.symmetric ? "symmetric" : "nonsymmetric", f.folds ? "‖VK−(VK)ᵀ‖/‖VK‖" : "‖K−Kᵀ‖/‖K‖",
         f.asymmetry, f.assembly_seconds, f.check_seconds, f.factorisation_seconds,
         factor.analysis_seconds(), factor.factor_nonzeros(),
         static_cast<double>(factor.factor_bytes()) / (1024.0 * 1024.0), iterations, newton_seconds,
-        residual, floor);
+        residual, floor,
+        f.pins.empty() ? "" : "; no support: a free body, its mean rigid motion removed");
   }
 
   /// f = Bᵀ (b_ext − K u_p) (static_assembly.hpp) without assembling K: the prescribed values

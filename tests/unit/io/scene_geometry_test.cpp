@@ -358,6 +358,95 @@ probes:
                        16, 42, "drops_below"));
 }
 
+/// stop_when.drops_below takes a drop for a failure only when bonds broke since the peak: a grip
+/// moved in one step makes the undamped plate's reaction swing (633 kN in the first step, 41 kN
+/// two steps later, no bond broken), which is not a failure; the same grip ramped on a plate whose
+/// bonds break near it is.
+TEST(SceneGeometry, StopWhenDropNeedsBrokenBonds) {
+  const auto status = [](const char* fracture_energy, const char* ramp) {
+    const std::string text = plate(R"(supports:
+  - name: left
+    box: [[0, 0], [0.01, 0.1]]
+    fixed: [x, y]
+  - name: right
+    box: [[0.19, 0], [0.2, 0.1]]
+    displacement: {x: 1e-5}
+    fixed: [y]
+effects: [damage]
+solver:
+  integrator: verlet
+  end_time: 2e-4
+  ramp_time: )" + std::string(ramp) +
+                                   R"(
+  stop_when: {probe: force, drops_below: 0.5}
+probes:
+  - name: force
+    support: right
+    component: x
+)");
+    std::string scene = text;
+    scene.replace(scene.find("density: 7800"), 13,
+                  "density: 7800\n    fracture_energy: " + std::string(fracture_energy));
+    return pd::run_scene(pd::parse_scene(scene, "s.yaml"), pd::RunOptions{}).result.status;
+  };
+  EXPECT_EQ(status("1e9", "0"), pd::RunStatus::end_time);
+  EXPECT_EQ(status("20", "1e-4"), pd::RunStatus::failed);
+}
+
+/// `integrator: static` with damage is quasi-static fracture: the plate pulled apart by its grips
+/// fails (stop_when) with its load curve in the summary, and `load_steps` is refused where it
+/// means nothing.
+TEST(SceneGeometry, StaticWithDamageIsQuasiStaticFracture) {
+  const std::string supports = R"(supports:
+  - name: left
+    box: [[0, 0], [0.01, 0.1]]
+    fixed: [x, y]
+  - name: right
+    box: [[0.19, 0], [0.2, 0.1]]
+    displacement: {x: 1e-4}
+    fixed: [y]
+cracks:
+  - name: notch
+    segment: [[0.1, 0.03], [0.1, 0.07]]
+effects: [damage]
+)";
+  const std::string probes = R"(probes:
+  - name: force
+    support: right
+    component: x
+output:
+  history_every: 1
+)";
+  std::string scene = plate(supports + R"(solver:
+  integrator: static
+  load_steps: 4
+  stop_when: {probe: force, drops_below: 0.5}
+)" + probes);
+  scene.replace(scene.find("density: 7800"), 13, "density: 7800\n    fracture_energy: 50");
+  const pd::RunOutcome out = pd::run_scene(pd::parse_scene(scene, "s.yaml"), pd::RunOptions{});
+  EXPECT_EQ(out.result.status, pd::RunStatus::failed) << out.result.message;
+  const pd::Json* q = out.summary.find("quasi_static");
+  ASSERT_TRUE(q != nullptr);
+  EXPECT_GT(*q->find("bonds_broken")->number(), 0);
+  EXPECT_GT(*q->find("dissipated_energy")->number(), 0);
+  // The history's time is the load factor: after the initial row, levels of 1/4 and the
+  // critical states between them.
+  ASSERT_GE(out.history.time.size(), 3u);
+  for (std::size_t r = 1; r < out.history.time.size(); ++r) {
+    EXPECT_GT(out.history.time[r], 0);
+    EXPECT_LE(out.history.time[r], 1.0);
+  }
+  EXPECT_GT(out.stop_peak, 0);
+
+  std::string adr = plate(supports + R"(solver:
+  integrator: adr
+  end_time: 1
+  load_steps: 4
+)" + probes);
+  adr.replace(adr.find("density: 7800"), 13, "density: 7800\n    fracture_energy: 50");
+  EXPECT_TRUE(fails_at(adr, 30, 15, "needs 'integrator: static'"));
+}
+
 /// A half plate with a symmetry plane gives the full plate's answer: a plate stretched by grips
 /// at both ends, against its right half with the plane x = 0 (on cell faces, as the lattice puts
 /// a box's faces) and one grip.

@@ -34,6 +34,16 @@ private:
   struct sigaction previous_[3]{};
 };
 
+/// From the first instruction of a command that stops cleanly to its InterruptGuard (reading the
+/// scene, starting MPI): SIGINT, SIGTERM and SIGHUP are held as a request, which the outermost
+/// guard then takes over instead of forgetting, so that a stop during set-up still ends the run
+/// with status 5 and a summary rather than killing it. Also takes delivery of the signals that
+/// arrived while they were blocked across the restart of pd (core/blas.hpp).
+void hold_stop_requests();
+/// For a command that does not stop cleanly (pd info): the signals act as they did before
+/// hold_stop_requests, and one held meanwhile ends the process now, as it would have.
+void release_stop_requests();
+
 /// While alive, a stop request that the code has not acted on within `abandon_grace_seconds`
 /// (acting on it means destroying this object) ends the process with exit status 5: `write` is
 /// called on a watchdog thread with the signal, to record the interrupted state, and then

@@ -52,6 +52,10 @@ struct RunOutcome {
   /// test when the run ends `failed`) and the time it was reached.
   double stop_peak = 0;
   double stop_peak_time = 0;
+  /// Quasi-static fracture (integrator static with damage): levels, solves, break events,
+  /// bonds broken, the energy they dissipated and the peak load factor (summary.json
+  /// `quasi_static`; null otherwise).
+  Json quasi_static;
   std::vector<std::string> warnings; ///< about the run's set-up (disk space), for the summary
 };
 

@@ -41,6 +41,8 @@ public:
   void flush_probes_if_stale(const ProbeHistory& history);
   /// probes.csv as the history stands now (e.g. beside a checkpoint, which it then matches).
   void write_probes(const ProbeHistory& history);
+  /// load_curve.csv of a quasi-static fracture run, replaced by `csv`.
+  void write_load_curve(const std::string& csv);
   /// The end of a run: the final frame (not of an unstable state), probes.csv without
   /// non-finite rows, and summary.json.
   void write_final(const Simulation& sim, bool unstable, const ProbeHistory& history,

@@ -62,6 +62,8 @@ public:
   std::optional<bool> boolean() const;
   std::optional<double> number() const;
   std::optional<std::string> text() const;
+  /// The elements of an array; nullptr for any other value.
+  const Array* items() const { return std::get_if<Array>(&value_); }
 
   /// Pretty-printed text. Non-finite numbers become null.
   std::string dump(int indent = 2) const;

@@ -17,6 +17,7 @@
 #include <cstdint>
 #include <functional>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -51,21 +52,26 @@ struct BondState {
 
 struct BoxRegionLoad {
   Region region;
-  enum class Kind { total, per_area, per_length, body, point } kind = Kind::total;
+  enum class Kind { total, per_area, per_length, body, point, pressure } kind = Kind::total;
   Vec3 value{0, 0, 0};
   double measure = 1;  ///< area [m²] or length [m] for per_area / per_length
   Vec3 point{0, 0, 0}; ///< kind point: where the force acts (load_particles says on which)
+  /// kind pressure: the shape on whose surface it acts, where that surface bounds a body
+  /// (surface_load.hpp), and the pressure [Pa], positive pushing into the body
+  Shape surface;
+  double pressure = 0;
 };
 
 template <>
 struct EnumName<BoxRegionLoad::Kind> {
   using Kind = BoxRegionLoad::Kind;
-  static constexpr NameTable<Kind, 5> table{{
+  static constexpr NameTable<Kind, 6> table{{
       {"total", Kind::total, "total force [N] spread over the region"},
       {"per_area", Kind::per_area, "traction [N/m²] on the loaded area"},
       {"per_length", Kind::per_length, "line load [N/m] on the loaded length"},
       {"body", Kind::body, "body force density [N/m³]"},
       {"point", Kind::point, "force [N] at a point, shared by the particles nearest it"},
+      {"pressure", Kind::pressure, "pressure [Pa] on the surface of a shape, into the body"},
   }};
 };
 
@@ -219,14 +225,25 @@ std::vector<Constraint> support_constraints(const ModelSpec& spec, const Particl
 /// The clamp planes of spec's mirror supports, each with the side its support's region lies on.
 std::vector<ClampPlane> clamp_planes(const ModelSpec& spec);
 
-/// The body particles (of the first `body_count`) a load acts on: those in its region, or for a
-/// point load the particles nearest its point (all within 10⁻⁶ λ of the nearest distance).
+/// The body particles (of the first `body_count`) a load acts on: those in its region, for a
+/// point load the particles nearest its point (all within 10⁻⁶ λ of the nearest distance), for a
+/// pressure the particles next to its surface (pressure_forces, surface_load.hpp).
 std::vector<std::uint32_t> load_particles(const ModelSpec& spec, const ParticleSet& particles,
                                           const LoadSpec& load, std::size_t body_count);
 
 /// Build particles, families, bond parameters, supports and loads.
 /// Throws std::runtime_error for inconsistent specs that the scene checker did not catch.
 Model build_model(const ModelSpec& spec);
+
+/// The lattice's toughness ratio (src/discretisation/lattice_toughness.cpp): the K at which a
+/// straight crack along a lattice axis runs in `spec`'s lattice with its corrections, over
+/// √(E' G0) (E' = E in plane stress, E/(1 − ν²) in plane strain), for the energy-derived s0
+/// (critical_stretch_from_fracture_energy); 2D s0 from G0 is divided by it. Computed in plane
+/// stress and cached per (m, horizon rule, corrections); nullopt outside 2D (not derived yet).
+std::optional<double> lattice_toughness_ratio(const ModelSpec& spec);
+
+/// The computation behind it in `spec`'s own plane mode, not cached (2D only).
+double lattice_toughness_ratio_in(const ModelSpec& spec);
 /// The same on particles already generated from spec's dimension, lattice and bodies.
 Model build_model(const ModelSpec& spec, ParticleSet particles);
 

@@ -114,9 +114,11 @@ struct EnumName<KernelPath> {
 
 /// The kernel of the virtual-fibre model (src/kernel/fibre_kernel.cpp: two passes, the mean
 /// strain of eq. 73 then the arm tensions of eqs. 70 and 77). Needs model.fibre_arms, which
-/// build_model fills when model.effects.bond_model is virtual_fibres; damage and plasticity are
-/// not implemented for it yet (std::logic_error). make_force_evaluator hands such models to it.
-std::unique_ptr<ForceEvaluator> make_fibre_evaluator(Model& model);
+/// build_model fills when model.effects.bond_model is virtual_fibres; damage needs plasticity
+/// (std::logic_error). Elastic arms take `path`; plastic arms run the scalar loops.
+/// make_force_evaluator hands such models to it.
+std::unique_ptr<ForceEvaluator> make_fibre_evaluator(Model& model,
+                                                     KernelPath path = KernelPath::simd);
 
 /// Pick the kernel for `model.effects`. The model must outlive the evaluator.
 std::unique_ptr<ForceEvaluator> make_force_evaluator(Model& model,

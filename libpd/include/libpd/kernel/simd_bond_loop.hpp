@@ -15,9 +15,14 @@
 #include "libpd/kernel/kernel_data.hpp"
 #include "libpd/physics/stretch.hpp"
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <string>
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
 
 namespace pd::kernel {
 
@@ -42,5 +47,32 @@ std::string simd_target_name();
 /// little above that. Under load the second thread can lose at every size: that is a reason for
 /// `--threads 1` on a busy machine, not for a higher threshold.
 inline constexpr std::size_t simd_parallel_min_bonds = 32768;
+
+/// Calls `rows(first, last)` once per thread of a parallel region (one thread below
+/// simd_parallel_min_bonds directed bonds) on contiguous particle ranges with equal bond counts
+/// (irregular sets balance too). A row kernel's result for a particle does not depend on which
+/// thread computes it, so neither does the whole.
+template <class Rows>
+void for_row_ranges(const std::size_t* offsets, std::size_t n, Rows&& rows) {
+  const std::size_t bonds = offsets[n];
+#pragma omp parallel if (bonds >= simd_parallel_min_bonds)
+  {
+    std::size_t first = 0, last = n;
+#ifdef _OPENMP
+    const auto t = static_cast<std::size_t>(omp_get_thread_num());
+    const auto threads = static_cast<std::size_t>(omp_get_num_threads());
+    const auto split = [&](std::size_t part) {
+      if (part >= threads) {
+        return n;
+      }
+      const std::size_t target = bonds / threads * part + bonds % threads * part / threads;
+      return static_cast<std::size_t>(std::lower_bound(offsets, offsets + n, target) - offsets);
+    };
+    first = split(t);
+    last = split(t + 1);
+#endif
+    rows(first, last);
+  }
+}
 
 } // namespace pd::kernel

@@ -40,7 +40,8 @@ struct EnumName<IntegratorKind> {
       {"adr", IntegratorKind::adr, "adaptive dynamic relaxation (Kilic & Madenci 2010)"},
       {"arkode", IntegratorKind::arkode, "SUNDIALS ARKode ERKStep with a Butcher table"},
       {"static", IntegratorKind::static_solve,
-       "one sparse solve of the linearised equilibrium, refined by Newton (elastic only)"},
+       "equilibrium by a sparse solve refined by Newton; with damage, quasi-static fracture "
+       "in load levels (solver.load_steps)"},
   }};
 };
 

@@ -28,6 +28,11 @@
 //
 // Method::static_ instead solves each level with the static solver, which breaks bonds in events
 // at equilibrium (time/static_solver.cpp); the observer sees the same Simulation interface.
+//
+// run_fracture is the path of a scene (`integrator: static` with damage): sequentially linear,
+// one bond (or a tie) per break at the load where it reaches s0, so that its failure load depends
+// on neither a rate nor the levels. The built-in cases keep run() (rc-beam breaks 5,400 bonds in
+// its first increment: two solves per bond would cost hours).
 #pragma once
 
 #include "libpd/discretisation/model.hpp"
@@ -93,6 +98,53 @@ std::size_t broken_bonds(const Model& model);
 /// Called after every increment with its equilibrium state: the caller records it (a curve row,
 /// a VTU file). The driver itself writes nothing.
 using IncrementObserver = std::function<void(const Simulation&, const IncrementInfo&)>;
+
+/// Quasi-static fracture, the path of a scene with `integrator: static` and damage (issue 36):
+/// the scene's prescribed displacements and loads scaled by each level in turn, every state an
+/// equilibrium solved by the static solver, bonds broken one group at a time (run_fracture).
+struct FracturePoint {
+  std::size_t level = 0;        ///< the level (1-based) the driver is on its way to
+  double load_factor = 0;       ///< of the scene's prescribed displacements and loads
+  bool critical = false;        ///< the most overstretched bonds are at s0 here and break after it
+  std::size_t bonds_broken = 0; ///< bonds broken so far, this point's breaks included
+  double dissipated_energy = 0; ///< Σ over them of the energy each stored as it broke [J]
+  std::size_t breaking = 0;     ///< bonds that break at this (critical) point
+};
+
+struct FractureSettings {
+  std::vector<double> levels; ///< increasing fractions of the scene's values, the last ≤ 1 is up
+                              ///< to the caller (usually 1)
+  /// Checked before every solve; true ends the run (an interrupt).
+  std::function<bool()> stop_requested;
+};
+
+struct FractureOutcome {
+  enum class End {
+    completed,     ///< every level reached in equilibrium
+    stopped,       ///< the observer or stop_requested ended it
+    no_equilibrium ///< after bonds broke no equilibrium exists at the load: the specimen failed
+  } end = End::completed;
+  std::string message;
+  std::size_t solves = 0;
+  std::size_t break_events = 0;
+  std::size_t bonds_broken = 0;
+  double dissipated_energy = 0; ///< [J]
+  double peak_load_factor = 0;  ///< the largest load factor of an equilibrium with its bonds
+};
+
+/// Called with every recorded equilibrium: each level reached, and each critical state before
+/// its bonds break. Returns false to stop the run (solver.stop_when).
+using FractureObserver = std::function<bool(const Simulation&, const FracturePoint&)>;
+
+/// Sequentially linear fracture on `sim` (a static-solver Simulation of `model`, damage on).
+/// Through each level: solve; if bonds are beyond s0, scale the level down to where the most
+/// overstretched one is exactly at s0 (stretch is linear in the level on a fixed set of bonds),
+/// solve there, record that critical state and break that bond (and those within a relative
+/// 1e-6 of it), then solve again at the level; repeat until no bond is beyond s0. Ladder levels
+/// only decide where equilibria are recorded between breaks: the sequence of critical states, and
+/// so the failure load, is that of the bonds alone (to the kernel's nonlinearity in the stretch).
+FractureOutcome run_fracture(Simulation& sim, Model& model, const FractureSettings& settings,
+                             const FractureObserver& observer);
 
 /// Run the model (its constraints' values are the full prescribed displacements) through
 /// `settings.levels` with the solver settings of the scene (the integrator is replaced by ADR)

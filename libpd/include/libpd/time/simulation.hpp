@@ -41,6 +41,9 @@ struct SolverSpec {
   std::size_t max_steps = 100'000'000;
   /// A displacement larger than this means the run has blown up. 0: the bounding-box diagonal.
   double blowup_displacement = 0;
+  /// `integrator: static` with damage (quasi-static fracture, time/quasi_static.hpp): the
+  /// prescribed displacements and loads are applied in this many equal levels.
+  std::size_t load_steps = 10;
   /// Stop as unstable when the kinetic energy outgrows the energy put in (time/energy_watch.hpp).
   /// Off only where a caller measures growth itself (pd stability's bounded runs).
   bool energy_check = true;

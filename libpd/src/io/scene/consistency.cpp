@@ -125,6 +125,16 @@ void check_solver(Reader& r, const Scene& scene, const Marks& marks) {
            "stop",
            "add 'end_time: T' [s] or a 'steady:' section under 'solver'");
   }
+  if (sol.has("load_steps") &&
+      (solver.integrator != IntegratorKind::static_solve || !model.effects.damage)) {
+    r.fail(sol.find("load_steps")->at(),
+           "'solver.load_steps' levels the load of a quasi-static fracture run, which needs "
+           "'integrator: static' and the damage effect",
+           solver.integrator != IntegratorKind::static_solve
+               ? "use 'integrator: static' (a ramp in time is 'ramp_time')"
+               : "add 'damage' to 'effects', or remove 'load_steps' (an elastic static solve is "
+                 "one solve at the full load)");
+  }
   if (solver.end_time && solver.ramp_time > *solver.end_time) {
     r.warn(sol.find("ramp_time")->at(),
            fmt::format("'solver.ramp_time' ({} s) exceeds 'solver.end_time' ({} s): the full load "

@@ -5,6 +5,7 @@
 #include "sections.hpp"
 
 #include <algorithm>
+#include <iterator>
 
 namespace pd::scene {
 
@@ -205,9 +206,21 @@ void check_regions(const Reader& r, const ModelSpec& model, const Marks& marks) 
       }
     }
   }
+  // Bodies of given particles (particle files, graded sets) are checked against their own
+  // particles: their spacing need not be the lattice's.
+  std::vector<BodySpec> lattice_bodies;
+  std::copy_if(model.bodies.begin(), model.bodies.end(), std::back_inserter(lattice_bodies),
+               [](const BodySpec& b) { return !b.points; });
+  const double tol = 1e-6 * lattice.spacing;
+  const auto holds_given_particle = [&](const Region& region) {
+    return std::any_of(model.bodies.begin(), model.bodies.end(), [&](const BodySpec& b) {
+      return b.points && std::any_of(b.points->position.begin(), b.points->position.end(),
+                                     [&](const Vec3& p) { return region.contains(p, dim, tol); });
+    });
+  };
   for (const RegionUse& use : marks.must_touch_bodies) {
-    const Region common = intersect_with_bodies(use.region, model.bodies, dim, lattice.spacing);
-    if (!holds_lattice_point(d, lattice, common)) {
+    const Region common = intersect_with_bodies(use.region, lattice_bodies, dim, lattice.spacing);
+    if (!holds_lattice_point(d, lattice, common) && !holds_given_particle(use.region)) {
       r.fail(use.node, use.what,
              "move or enlarge the box so that it contains particles of a body (particles sit at "
              "lattice points inside the body boxes)");
@@ -264,6 +277,90 @@ void check_shaped_bodies(const Reader& r, const ModelSpec& model, const Marks& m
       r.fail(use.node, use.what,
              "move or enlarge the box so that it contains particles of a body (particles sit at "
              "lattice points inside the bodies)");
+    }
+  }
+}
+
+/// Planes and cracks that the format puts on cell faces, checked on the particles: a crack
+/// through particle centres cuts every bond of those particles that crosses it, so they hang on
+/// the bonds along the crack alone (a static solve finds the stiffness singular, relaxation
+/// leaves them loose): an error for lattice particles, a warning for given ones (a particle
+/// file or graded set need not have rows). A symmetry plane through particle centres is warned
+/// about: the format puts it on a cell face.
+void check_cracks_and_planes(Reader& r, const ModelSpec& model, const Marks& marks,
+                             const ParticleSet& particles) {
+  const int dim = model.dimension.dim;
+  const double spacing = model.lattice.spacing;
+  const double tol = 1e-6 * spacing;
+  const auto given = [&](std::size_t i) {
+    return static_cast<bool>(model.bodies.at(particles.body[i]).points);
+  };
+  const auto where = [](const Vec3& p) {
+    return fmt::format("[{:.6g}, {:.6g}, {:.6g}]", p[0], p[1], p[2]);
+  };
+  for (std::size_t c = 0; c < model.cracks.size(); ++c) {
+    const Crack& crack = model.cracks[c];
+    const auto& v = crack.vertices;
+    Vec3 normal{0, 0, 0};
+    if (dim == 2) {
+      normal = {v[0][1] - v[1][1], v[1][0] - v[0][0], 0};
+    } else {
+      const Vec3 u{v[1][0] - v[0][0], v[1][1] - v[0][1], v[1][2] - v[0][2]};
+      const Vec3 w{v[2][0] - v[0][0], v[2][1] - v[0][1], v[2][2] - v[0][2]};
+      normal = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
+    }
+    const double length = norm(normal);
+    if (!(length > 0)) {
+      continue; // refused by read_cracks
+    }
+    std::size_t on_lattice = 0, on_given = 0;
+    Vec3 first{}, last{};
+    for (std::size_t i = 0; i < particles.size(); ++i) {
+      const Vec3& p = particles.position[i];
+      Vec3 a = p, b = p;
+      for (std::size_t k = 0; k < 3; ++k) {
+        a[k] -= tol * normal[k] / length;
+        b[k] += tol * normal[k] / length;
+      }
+      if (crack.cuts(a, b, dim)) {
+        (given(i) ? on_given : on_lattice) += 1;
+        first = on_lattice + on_given == 1 ? p : first;
+        last = p;
+      }
+    }
+    const std::string what = fmt::format(
+        "crack '{}' runs through the centres of {} particles (from {} to {}): it cuts every "
+        "bond of theirs that crosses it, so they hang on the bonds along the crack alone "
+        "(isolated from the body: a static solve finds the stiffness singular)",
+        crack.name, on_lattice + on_given, where(first), where(last));
+    const std::string hint = fmt::format(
+        "put the crack on the cell faces between particle rows: shift it by half a spacing "
+        "({} m) across",
+        format_number(0.5 * spacing));
+    if (on_lattice > 0) {
+      r.fail(marks.crack_nodes.at(c), what, hint);
+    } else if (on_given > 0) {
+      r.warn(marks.crack_nodes.at(c), what + "; " + hint);
+    }
+  }
+  for (std::size_t s = 0; s < model.supports.size(); ++s) {
+    const SupportSpec& sup = model.supports[s];
+    for (std::size_t a = 0; a < static_cast<std::size_t>(dim); ++a) {
+      if (!sup.symmetry[a]) {
+        continue;
+      }
+      const auto count =
+          std::count_if(particles.position.begin(), particles.position.end(),
+                        [&](const Vec3& p) { return std::abs(p[a] - sup.symmetry_at[a]) <= tol; });
+      if (count > 0) {
+        r.warn(marks.support_nodes.at(s),
+               fmt::format("the symmetry plane {} = {} of support '{}' runs through the centres "
+                           "of {} particles, not along a cell face as a symmetry plane must (a "
+                           "half model's body ends on the plane, half a spacing beyond its last "
+                           "particles); move the plane by half a spacing ({} m)",
+                           "xyz"[a], format_number(sup.symmetry_at[a]), sup.name, count,
+                           format_number(0.5 * spacing)));
+      }
     }
   }
 }
@@ -415,8 +512,13 @@ std::optional<ParticleSet> check_against_lattice(Reader& r, const Scene& scene,
   // building reuses them.
   const bool shaped = std::any_of(model.bodies.begin(), model.bodies.end(),
                                   [](const BodySpec& b) { return !b.region.only_boxes(); });
-  if (!shaped && std::none_of(model.supports.begin(), model.supports.end(),
-                              [](const SupportSpec& s) { return s.mirrors(); })) {
+  const bool planes =
+      std::any_of(model.supports.begin(), model.supports.end(), [](const SupportSpec& s) {
+        return s.symmetry[0] || s.symmetry[1] || s.symmetry[2];
+      });
+  if (!shaped && model.cracks.empty() && !planes &&
+      std::none_of(model.supports.begin(), model.supports.end(),
+                   [](const SupportSpec& s) { return s.mirrors(); })) {
     warn_represented_volume(r, model, marks, nullptr);
     return std::nullopt;
   }
@@ -425,6 +527,7 @@ std::optional<ParticleSet> check_against_lattice(Reader& r, const Scene& scene,
     check_shaped_bodies(r, model, marks, particles);
   }
   warn_represented_volume(r, model, marks, &particles);
+  check_cracks_and_planes(r, model, marks, particles);
   try {
     support_constraints(model, particles);
   } catch (const SupportError& e) {

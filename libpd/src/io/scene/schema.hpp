@@ -110,6 +110,7 @@ extern const Section crack_section;
 extern const Section cylinder_section;
 extern const Section sphere_section;
 extern const Section half_space_section;
+extern const Section surface_section;
 extern const Section support_section;
 extern const Section load_section;
 extern const Section model_section;

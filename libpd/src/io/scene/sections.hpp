@@ -84,6 +84,7 @@ struct Marks {
   std::vector<std::vector<YAML::Node>> body_box_nodes; ///< per body, per box
   std::vector<YAML::Node> body_nodes;                  ///< per body: its box(es) or shape
   std::vector<YAML::Node> support_nodes;               ///< where a support's own errors point
+  std::vector<YAML::Node> crack_nodes;                 ///< per crack: its segment or polygon
   std::vector<RegionUse> must_have_particles;          ///< bodies
   std::vector<RegionUse> must_touch_bodies;            ///< supports, loads, region probes
   std::vector<std::pair<Vec3, YAML::Node>> probe_points;
@@ -104,6 +105,8 @@ std::optional<Shape> read_body_shape(Reader& r, const Fields& f);
 void read_cracks(Reader& r, ModelSpec& model, Marks& marks);
 /// A body's `minus` list: the shapes taken out of it.
 std::vector<Shape> read_minus(Reader& r, const Fields& f);
+/// The `surface` section of `f` (a pressure load's shape: box, cylinder or sphere).
+Shape read_surface(Reader& r, const Fields& f);
 void read_supports(Reader& r, ModelSpec& model, Marks& marks);
 void read_loads(Reader& r, ModelSpec& model, Marks& marks);
 /// `effects` and the `model` section.

@@ -108,6 +108,40 @@ constinit const Section shape_section{"in a shape of 'minus'", shape_keys};
 
 namespace {
 
+constexpr Key surface_keys[] = {
+    {.name = "box",
+     .type = Type::box,
+     .doc = "a box [[lo], [hi]]: its faces",
+     .unit = "m",
+     .example = "[[0, 0, 0], [1, 0.1, 0.1]]",
+     .need = Need::one_of,
+     .group = 1},
+    shape_key("cylinder",
+              "a cylinder (2D: a disk): its wall, and in 3D its ends if it has a 'length'",
+              &cylinder_section),
+    shape_key("sphere", "a sphere (2D: a disk)", &sphere_section),
+};
+
+} // namespace
+
+constinit const Section surface_section{"in the surface of a load", surface_keys};
+
+Shape read_surface(Reader& r, const Fields& parent) {
+  const Fields f = r.section(parent, "surface");
+  Shape s;
+  if (const Entry* b = f.find("box")) {
+    s.kind = Shape::Kind::box;
+    s.box = r.box(b->at(), f.label("box"));
+  } else if (f.has("cylinder") || f.has("sphere")) {
+    s = read_round(r, f, f.has("cylinder") ? "cylinder" : "sphere");
+  } else {
+    r.lookup(f, "box"); // reports the missing alternatives
+  }
+  return s;
+}
+
+namespace {
+
 constexpr Key crack_keys[] = {
     name_key("unique name of the crack", "notch"),
     {.name = "segment",
@@ -159,6 +193,11 @@ void read_cracks(Reader& r, ModelSpec& model, Marks& marks) {
       c.vertices.push_back(
           r.coordinates(n[k], fmt::format("point {} of {}", k + 1, f.label(key)), "m"));
     }
+    if (r.dim == 2 && c.vertices[0] == c.vertices[1]) {
+      // A crack of no length cuts no bond, and the FE reference cannot mesh a slit of none.
+      r.fail(n, fmt::format("crack '{}' has no length: its two points are the same", c.name),
+             "give the crack's two different end points");
+    }
     if (r.dim == 3) {
       const Vec3& a = c.vertices[0];
       const Vec3& b = c.vertices[1];
@@ -202,6 +241,7 @@ void read_cracks(Reader& r, ModelSpec& model, Marks& marks) {
       r.warn(n, fmt::format("crack '{}' lies outside every body: it cuts no bond", c.name));
     }
     model.cracks.push_back(std::move(c));
+    marks.crack_nodes.push_back(n);
   }
 }
 

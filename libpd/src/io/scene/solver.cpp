@@ -102,6 +102,16 @@ constexpr Key solver_keys[] = {
      .unit = "m",
      .range = non_negative,
      .bind = field_with_default<&SolverSpec::blowup_displacement>()},
+    {.name = "load_steps",
+     .type = Type::integer,
+     .doc = "integrator static with damage (quasi-static fracture): the prescribed displacements "
+            "and loads grow in this many equal levels, each solved to equilibrium with the "
+            "most overstretched bond broken first and the rest solved again; the failure load "
+            "does not depend on it",
+     .unit = "levels",
+     .range = at_least_one,
+     .show = Show::commented,
+     .bind = field_with_default<&SolverSpec::load_steps>()},
     {.name = "steady",
      .type = Type::section,
      .doc = "steady-state stop; its presence (even empty) enables it",
@@ -127,8 +137,9 @@ constexpr Key stop_when_keys[] = {
      .need = Need::required},
     {.name = "drops_below",
      .type = Type::number,
-     .doc = "stop once |value| falls below this fraction of its peak |value| so far (a reaction "
-            "after the specimen broke)",
+     .doc = "stop once |value| falls below this fraction of its peak |value| so far and bonds "
+            "have broken since that peak (a reaction after the specimen broke; a swing of the "
+            "probe with no bond broken is not a failure, and without damage nothing can fail)",
      .range = {0, 1, true, true},
      .example = "0.5",
      .need = Need::one_of,

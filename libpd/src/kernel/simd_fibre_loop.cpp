@@ -1,0 +1,221 @@
+// The virtual-fibre kernel's passes over Google Highway (see kernel/simd_fibre_loop.hpp for the
+// contract). foreach_target.h re-includes this file once per instruction set. As in
+// simd_bond_loop.cpp, every floating-point operation is an explicit Highway op in the scalar
+// kernel's order (compiled with -ffp-contract=off), and each particle's sum uses the fixed
+// virtual-lane order: that is what keeps the result the same on every instruction set.
+
+#undef HWY_TARGET_INCLUDE
+#define HWY_TARGET_INCLUDE "kernel/simd_fibre_loop.cpp"
+#include "libpd/kernel/simd_fibre_loop.hpp"
+
+#include "libpd/kernel/simd_bond_loop.hpp"
+
+#include <hwy/foreach_target.h> // IWYU pragma: keep
+#include <hwy/highway.h>
+
+HWY_BEFORE_NAMESPACE();
+namespace pd::kernel::HWY_NAMESPACE {
+namespace fibre {
+namespace hn = hwy::HWY_NAMESPACE;
+
+using D = hn::CappedTag<double, virtual_lanes>;
+using V = hn::Vec<D>;
+constexpr std::size_t kN = hn::MaxLanes(D());
+constexpr std::size_t kU = virtual_lanes / kN;
+static_assert(kN * kU == virtual_lanes, "vector width must divide the virtual lane count");
+
+/// One block's per-arm arrays: the row itself, or a padded copy for the row's last < 8 arms
+/// (lanes past the row end repeat the block's first arm: finite values, masked off).
+struct Block {
+  const std::int32_t* neighbour;
+  const double* inverse_length;
+  const double* weight; ///< pass 1: mean_weight; pass 2: own
+  const double* other;  ///< pass 2 only
+};
+
+struct Tail {
+  alignas(64) std::int32_t neighbour[virtual_lanes];
+  alignas(64) double inverse_length[virtual_lanes];
+  alignas(64) double weight[virtual_lanes];
+  alignas(64) double other[virtual_lanes];
+  Block fill(const std::int32_t* nb, const FibreData& fd, const double* weight_row, std::size_t k,
+             std::size_t n, bool with_other) {
+    for (std::size_t l = 0; l < virtual_lanes; ++l) {
+      const std::size_t src = k + (l < n ? l : 0);
+      neighbour[l] = nb[src];
+      inverse_length[l] = fd.inverse_length[src];
+      weight[l] = weight_row[src];
+      other[l] = with_other ? fd.other[src] : 0.0;
+    }
+    return {neighbour, inverse_length, weight, other};
+  }
+};
+
+/// y_j − y_i for kN arms, and the arm's length r = |y_j − y_i| (eq. 36's ε = r/|ξ| − 1 follows).
+/// Neighbour positions are gathered by scalar loads, as in the bond-based loop (measured faster
+/// than vgatherqpd on Zen 4).
+HWY_INLINE void arm(D d, const double* y, const std::int32_t* nb, V yi0, V yi1, V yi2, V& dy0,
+                    V& dy1, V& dy2, V& r) {
+  alignas(64) double yj0[kN], yj1[kN], yj2[kN];
+  for (std::size_t l = 0; l < kN; ++l) {
+    const double* yj = y + 3 * static_cast<std::size_t>(nb[l]);
+    yj0[l] = yj[0];
+    yj1[l] = yj[1];
+    yj2[l] = yj[2];
+  }
+  dy0 = hn::Sub(hn::Load(d, yj0), yi0);
+  dy1 = hn::Sub(hn::Load(d, yj1), yi1);
+  dy2 = hn::Sub(hn::Load(d, yj2), yi2);
+  r = hn::Sqrt(hn::Add(hn::Add(hn::Mul(dy0, dy0), hn::Mul(dy1, dy1)), hn::Mul(dy2, dy2)));
+}
+
+/// The lanes of `acc` added in virtual-lane order 0…7.
+HWY_INLINE double lane_sum(D d, const V (&acc)[kU]) {
+  alignas(64) double lanes[virtual_lanes];
+  for (std::size_t u = 0; u < kU; ++u) {
+    hn::Store(acc[u], d, lanes + u * kN);
+  }
+  double sum = lanes[0];
+  for (std::size_t l = 1; l < virtual_lanes; ++l) {
+    sum += lanes[l];
+  }
+  return sum;
+}
+
+/// Pass 1 on one block: Σ (1/N) A_k |ξ_k| ε_k into the lane sums.
+template <bool Full>
+HWY_INLINE void mean_block(const double* y, V yi0, V yi1, V yi2, const Block& p, std::size_t valid,
+                           V (&acc)[kU]) {
+  const D d;
+  const V one = hn::Set(d, 1.0);
+  for (std::size_t u = 0; u < kU; ++u) {
+    const std::size_t o = u * kN;
+    V dy0, dy1, dy2, r;
+    arm(d, y, p.neighbour + o, yi0, yi1, yi2, dy0, dy1, dy2, r);
+    const V strain = hn::Sub(hn::Mul(r, hn::LoadU(d, p.inverse_length + o)), one);
+    V term = hn::Mul(hn::LoadU(d, p.weight + o), strain);
+    if constexpr (!Full) {
+      term = hn::IfThenElseZero(hn::FirstN(d, valid > o ? valid - o : 0), term);
+    }
+    acc[u] = hn::Add(acc[u], term);
+  }
+}
+
+void MeanRows(const FibreData& fd, const double* y, double* /*b*/, std::size_t first,
+              std::size_t last) {
+  const D d;
+  const auto* nb = reinterpret_cast<const std::int32_t*>(fd.neighbour);
+  for (std::size_t i = first; i < last; ++i) {
+    const V yi0 = hn::Set(d, y[3 * i]), yi1 = hn::Set(d, y[3 * i + 1]),
+            yi2 = hn::Set(d, y[3 * i + 2]);
+    V acc[kU];
+    for (V& a : acc) {
+      a = hn::Zero(d);
+    }
+    const std::size_t end = fd.offsets[i + 1];
+    std::size_t k = fd.offsets[i];
+    for (; k + virtual_lanes <= end; k += virtual_lanes) {
+      mean_block<true>(y, yi0, yi1, yi2,
+                       Block{nb + k, fd.inverse_length + k, fd.mean_weight + k, nullptr},
+                       virtual_lanes, acc);
+    }
+    if (k < end) {
+      Tail t;
+      const Block p = t.fill(nb, fd, fd.mean_weight, k, end - k, false);
+      mean_block<false>(y, yi0, yi1, yi2, p, end - k, acc);
+    }
+    fd.mean_term[i] = fd.volumetric[i] * lane_sum(d, acc);
+  }
+}
+
+/// Pass 2 on one block: each arm's tension (eq. 70) times its direction into the lane sums.
+template <bool Full>
+HWY_INLINE void force_block(const FibreData& fd, const double* y, V yi0, V yi1, V yi2, V shear_i,
+                            V mean_i, const Block& p, std::size_t valid, V (&acc)[3][kU]) {
+  const D d;
+  const V one = hn::Set(d, 1.0);
+  for (std::size_t u = 0; u < kU; ++u) {
+    const std::size_t o = u * kN;
+    V dy0, dy1, dy2, r;
+    arm(d, y, p.neighbour + o, yi0, yi1, yi2, dy0, dy1, dy2, r);
+    alignas(64) double shear_j[kN], mean_j[kN];
+    for (std::size_t l = 0; l < kN; ++l) {
+      const auto j = static_cast<std::size_t>(p.neighbour[o + l]);
+      shear_j[l] = fd.shear[j];
+      mean_j[l] = fd.mean_term[j];
+    }
+    const V strain = hn::Sub(hn::Mul(r, hn::LoadU(d, p.inverse_length + o)), one);
+    const V s_i = hn::Add(hn::Mul(shear_i, strain), mean_i);
+    const V s_j = hn::Add(hn::Mul(hn::Load(d, shear_j), strain), hn::Load(d, mean_j));
+    V g = hn::Div(
+        hn::Add(hn::Mul(hn::LoadU(d, p.weight + o), s_i), hn::Mul(hn::LoadU(d, p.other + o), s_j)),
+        r);
+    if constexpr (!Full) {
+      g = hn::IfThenElseZero(hn::FirstN(d, valid > o ? valid - o : 0), g);
+    }
+    acc[0][u] = hn::Add(acc[0][u], hn::Mul(g, dy0));
+    acc[1][u] = hn::Add(acc[1][u], hn::Mul(g, dy1));
+    acc[2][u] = hn::Add(acc[2][u], hn::Mul(g, dy2));
+  }
+}
+
+void ForceRows(const FibreData& fd, const double* y, double* b, std::size_t first,
+               std::size_t last) {
+  const D d;
+  const auto* nb = reinterpret_cast<const std::int32_t*>(fd.neighbour);
+  for (std::size_t i = first; i < last; ++i) {
+    const V yi0 = hn::Set(d, y[3 * i]), yi1 = hn::Set(d, y[3 * i + 1]),
+            yi2 = hn::Set(d, y[3 * i + 2]);
+    const V shear_i = hn::Set(d, fd.shear[i]), mean_i = hn::Set(d, fd.mean_term[i]);
+    V acc[3][kU];
+    for (auto& row : acc) {
+      for (V& a : row) {
+        a = hn::Zero(d);
+      }
+    }
+    const std::size_t end = fd.offsets[i + 1];
+    std::size_t k = fd.offsets[i];
+    for (; k + virtual_lanes <= end; k += virtual_lanes) {
+      force_block<true>(fd, y, yi0, yi1, yi2, shear_i, mean_i,
+                        Block{nb + k, fd.inverse_length + k, fd.own + k, fd.other + k},
+                        virtual_lanes, acc);
+    }
+    if (k < end) {
+      Tail t;
+      const Block p = t.fill(nb, fd, fd.own, k, end - k, true);
+      force_block<false>(fd, y, yi0, yi1, yi2, shear_i, mean_i, p, end - k, acc);
+    }
+    for (std::size_t c = 0; c < 3; ++c) {
+      b[3 * i + c] = lane_sum(d, acc[c]);
+    }
+  }
+}
+
+} // namespace fibre
+
+FibreRows FibreMeanRowsFor() {
+  return &fibre::MeanRows;
+}
+FibreRows FibreForceRowsFor() {
+  return &fibre::ForceRows;
+}
+
+} // namespace pd::kernel::HWY_NAMESPACE
+HWY_AFTER_NAMESPACE();
+
+#if HWY_ONCE
+namespace pd::kernel {
+
+HWY_EXPORT(FibreMeanRowsFor);
+HWY_EXPORT(FibreForceRowsFor);
+
+FibreRows simd_fibre_mean_rows() {
+  return HWY_DYNAMIC_DISPATCH(FibreMeanRowsFor)();
+}
+
+FibreRows simd_fibre_force_rows() {
+  return HWY_DYNAMIC_DISPATCH(FibreForceRowsFor)();
+}
+
+} // namespace pd::kernel
+#endif
