@@ -260,7 +260,8 @@ EffectSet kernel_effects(const ModelSpec& spec, std::size_t materials_used) {
   // The fibre model's field is the bound of fibre_stiffness_bound, one value per bond.
   effects.per_bond_field = spec.effects.bond_model == BondModel::virtual_fibres ||
                            materials_used > 1 || spec.corrections().corrects() ||
-                           spec.lattice.volume_variation > 0 || weighted_mirrors;
+                           spec.has_mesh_body() || spec.lattice.volume_variation > 0 ||
+                           weighted_mirrors;
   effects.body_force = std::any_of(spec.loads.begin(), spec.loads.end(), [](const LoadSpec& l) {
     return l.load.kind == BoxRegionLoad::Kind::body;
   });
@@ -689,6 +690,19 @@ Model build_model(const ModelSpec& spec, ParticleSet particles) {
       std::all_of(spec.bodies.begin(), spec.bodies.end(),
                   [](const BodySpec& b) { return !b.points || b.mesh; })) {
     m.particles.particle_size.clear();
+    if (spec.has_mesh_body()) {
+      const char* surface = lattice_only(spec.surface_correction);
+      const char* volume = lattice_only(spec.volume_correction);
+      if (surface != nullptr || volume != nullptr) {
+        throw std::runtime_error(
+            std::string("a mesh body is an unstructured particle set: ") +
+            (surface != nullptr
+                 ? "surface correction " + std::string(to_string(spec.surface_correction)) +
+                       " needs a lattice (" + surface + ")"
+                 : "volume correction " + std::string(to_string(spec.volume_correction)) +
+                       " needs a lattice (" + volume + ")"));
+      }
+    }
   }
   const std::size_t body_count = m.particles.size();
   if (body_count == 0) {
@@ -776,6 +790,16 @@ Model build_model(const ModelSpec& spec, ParticleSet particles) {
 
   m.external_force_density = load_force_densities(spec, m.particles, body_count);
   return m;
+}
+
+std::string mesh_corrections_note(const ModelSpec& spec) {
+  if (!spec.has_mesh_body() || spec.effects.bond_model == BondModel::virtual_fibres) {
+    return "";
+  }
+  return std::string("surface ") + to_string(spec.surface_correction) + ", volume " +
+         to_string(spec.volume_correction) +
+         ": a mesh body is an unstructured set, so the lattice defaults (ghost layers, gradient "
+         "weights) do not apply; these correct uniform strain, not bending";
 }
 
 ExtrapolatedParticles refit_extrapolation(const Model& m, double fit_radius) {

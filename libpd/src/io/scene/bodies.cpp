@@ -200,8 +200,18 @@ void read_mesh_body(Reader& r, const Fields& f, const ModelSpec& model, BodySpec
   for (const std::string& w : mesh.warnings) {
     r.warn(e->at(), w);
   }
+  for (const auto& [name, particles] : mesh.groups) {
+    std::vector<Vec3>& points = r.mesh_groups[name];
+    for (const std::uint32_t p : particles) {
+      points.push_back(mesh.cloud.position[p]);
+    }
+    std::sort(points.begin(), points.end());
+  }
+  r.mesh_files.push_back(path.string());
   body.points = std::make_shared<const PointCloud>(std::move(mesh.cloud));
   body.mesh = true;
+  body.mesh_file = path.string();
+  body.mesh_is_geometry = !meshed;
   body.region.boxes = {bounding_box(*body.points)};
   marks.body_box_nodes.push_back({e->at()});
 }
