@@ -690,18 +690,12 @@ Model build_model(const ModelSpec& spec, ParticleSet particles) {
       std::all_of(spec.bodies.begin(), spec.bodies.end(),
                   [](const BodySpec& b) { return !b.points || b.mesh; })) {
     m.particles.particle_size.clear();
-    if (spec.has_mesh_body()) {
-      const char* surface = lattice_only(spec.surface_correction);
-      const char* volume = lattice_only(spec.volume_correction);
-      if (surface != nullptr || volume != nullptr) {
-        throw std::runtime_error(
-            std::string("a mesh body is an unstructured particle set: ") +
-            (surface != nullptr
-                 ? "surface correction " + std::string(to_string(spec.surface_correction)) +
-                       " needs a lattice (" + surface + ")"
-                 : "volume correction " + std::string(to_string(spec.volume_correction)) +
-                       " needs a lattice (" + volume + ")"));
-      }
+    const char* why = spec.has_mesh_body() ? lattice_only(spec.surface_correction) : nullptr;
+    why = why != nullptr || !spec.has_mesh_body() ? why : lattice_only(spec.volume_correction);
+    if (why != nullptr) {
+      throw std::runtime_error(std::string("a mesh body is an unstructured set, but a correction "
+                                           "of the model needs a lattice: ") +
+                               why);
     }
   }
   const std::size_t body_count = m.particles.size();
@@ -790,16 +784,6 @@ Model build_model(const ModelSpec& spec, ParticleSet particles) {
 
   m.external_force_density = load_force_densities(spec, m.particles, body_count);
   return m;
-}
-
-std::string mesh_corrections_note(const ModelSpec& spec) {
-  if (!spec.has_mesh_body() || spec.effects.bond_model == BondModel::virtual_fibres) {
-    return "";
-  }
-  return std::string("surface ") + to_string(spec.surface_correction) + ", volume " +
-         to_string(spec.volume_correction) +
-         ": a mesh body is an unstructured set, so the lattice defaults (ghost layers, gradient "
-         "weights) do not apply; these correct uniform strain, not bending";
 }
 
 ExtrapolatedParticles refit_extrapolation(const Model& m, double fit_radius) {

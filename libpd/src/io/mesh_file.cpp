@@ -141,6 +141,172 @@ double signed_area(const std::vector<Vec3>& corners) {
 }
 
 /// The particles of the current model's elements of dimension `dim`, and its physical groups.
+/// A mesh's elements of the body's dimension, in particle order: what the checks and the
+/// physical groups need besides the particles.
+struct Elements {
+  struct Element {
+    std::size_t tag;
+    std::string type;
+    double orientation; // 3D: the signed volume; 2D: the corners' signed area
+  };
+  std::vector<Element> list;
+  std::vector<std::size_t> nodes;      // every node of every element, in particle order
+  std::vector<std::size_t> offsets{0}; // element p's nodes: [offsets[p], offsets[p + 1])
+  std::unordered_map<std::size_t, std::uint32_t> particle_of_element;
+};
+
+/// One particle per element of dimension `dim`: its centroid and volume from Gauss sums of the
+/// element's own Jacobian.
+Elements read_elements(GmshSession& s, int dim, double thickness,
+                       const std::unordered_map<std::size_t, Vec3>& node, MeshBody& body) {
+  std::vector<int> types;
+  s.run("listing the elements", [&] { gmsh::model::mesh::getElementTypes(types, dim); });
+  if (types.empty()) {
+    s.fail(fmt::format("has no {}D elements (a body needs {})", dim,
+                       dim == 3 ? "tetrahedra, hexahedra, prisms or pyramids"
+                                : "triangles or quadrangles"));
+  }
+  Elements out;
+  for (const int type : types) {
+    std::string name;
+    int type_dim = 0, order = 0, nodes_per = 0, primary = 0;
+    std::vector<double> local;
+    std::vector<std::size_t> tags, nodes;
+    std::vector<double> points, weights, jacobians, det, at;
+    s.run("reading the elements", [&] {
+      gmsh::model::mesh::getElementProperties(type, name, type_dim, order, nodes_per, local,
+                                              primary);
+      gmsh::model::mesh::getElementsByType(type, tags, nodes);
+      // Exact for the volume and the first moment of elements up to this order.
+      gmsh::model::mesh::getIntegrationPoints(type, fmt::format("Gauss{}", std::max(2, 3 * order)),
+                                              points, weights);
+      gmsh::model::mesh::getJacobians(type, points, jacobians, det, at);
+    });
+    const std::size_t g = weights.size();
+    const auto n = static_cast<std::size_t>(nodes_per);
+    for (std::size_t e = 0; e < tags.size(); ++e) {
+      double v = 0;
+      Vec3 moment{0, 0, 0};
+      for (std::size_t q = 0; q < g; ++q) {
+        const double w = weights[q] * det[e * g + q];
+        v += w;
+        for (std::size_t a = 0; a < 3; ++a) {
+          moment[a] += w * at[3 * (e * g + q) + a];
+        }
+      }
+      double orientation = v;
+      if (dim == 2) {
+        std::vector<Vec3> corners;
+        for (std::size_t c = 0; c < static_cast<std::size_t>(primary); ++c) {
+          corners.push_back(node.at(nodes[e * n + c]));
+        }
+        orientation = signed_area(corners);
+      }
+      out.particle_of_element.emplace(tags[e], static_cast<std::uint32_t>(out.list.size()));
+      out.list.push_back({tags[e], name, orientation});
+      body.cloud.position.push_back({moment[0] / v, moment[1] / v, moment[2] / v});
+      body.cloud.volume.push_back(dim == 2 ? std::abs(v) * thickness : v);
+      out.nodes.insert(out.nodes.end(), nodes.begin() + static_cast<long>(e * n),
+                       nodes.begin() + static_cast<long>((e + 1) * n));
+      out.offsets.push_back(out.nodes.size());
+    }
+  }
+  return out;
+}
+
+/// Inverted and degenerate elements. In 3D Gmsh's Jacobian is signed; in 2D it is not, and a
+/// plane mesh may run either way round, so an element turned against the mesh's majority is the
+/// inverted one.
+void check_orientation(GmshSession& s, int dim, const Elements& elements, const MeshBody& body) {
+  const auto count = static_cast<double>(elements.list.size());
+  double mean = 0;
+  long long positive = 0;
+  for (const auto& e : elements.list) {
+    mean += std::abs(e.orientation) / count;
+    positive += e.orientation > 0 ? 1 : 0;
+  }
+  const double sign = dim == 3 || 2 * static_cast<double>(positive) >= count ? 1 : -1;
+  const double zero = 1e-9 * mean;
+  for (std::size_t i = 0; i < elements.list.size(); ++i) {
+    const auto& e = elements.list[i];
+    const Vec3& at = body.cloud.position[i];
+    if (!(std::abs(e.orientation) > zero) || !std::isfinite(at[0])) {
+      s.fail(fmt::format("element {} ({}) at {} has zero {}", e.tag, e.type, point_text(at),
+                         dim == 3 ? "volume" : "area"));
+    }
+    if (sign * e.orientation < 0) {
+      s.fail(fmt::format("element {} ({}) at {} is inverted ({} {:.6g}{})", e.tag, e.type,
+                         point_text(at), dim == 3 ? "signed volume" : "signed area", e.orientation,
+                         dim == 3 ? "" : ", against the orientation of the mesh's other elements"));
+    }
+  }
+}
+
+/// The physical groups of dimension up to `dim` as particle sets (mesh_file.hpp).
+void read_groups(GmshSession& s, int dim, const Elements& elements, MeshBody& body) {
+  std::vector<std::pair<int, int>> groups;
+  s.run("reading the physical groups", [&] { gmsh::model::getPhysicalGroups(groups); });
+  std::unordered_map<std::size_t, std::vector<std::uint32_t>> particles_at_node;
+  if (std::any_of(groups.begin(), groups.end(), [&](const auto& g) { return g.first < dim; })) {
+    for (std::uint32_t p = 0; p < elements.list.size(); ++p) {
+      for (std::size_t k = elements.offsets[p]; k < elements.offsets[p + 1]; ++k) {
+        auto& list = particles_at_node[elements.nodes[k]];
+        if (list.empty() || list.back() != p) {
+          list.push_back(p);
+        }
+      }
+    }
+  }
+  for (const auto& [group_dim, group_tag] : groups) {
+    if (group_dim > dim) {
+      continue;
+    }
+    std::string name;
+    std::vector<int> entities;
+    s.run("reading the physical groups", [&] {
+      gmsh::model::getPhysicalName(group_dim, group_tag, name);
+      gmsh::model::getEntitiesForPhysicalGroup(group_dim, group_tag, entities);
+    });
+    if (name.empty()) {
+      name = fmt::format("{}:{}", group_dim, group_tag);
+    }
+    std::vector<std::uint32_t>& selected = body.groups[name];
+    for (const int entity : entities) {
+      std::vector<int> entity_types;
+      std::vector<std::vector<std::size_t>> tags, nodes;
+      s.run("reading the physical groups",
+            [&] { gmsh::model::mesh::getElements(entity_types, tags, nodes, group_dim, entity); });
+      for (std::size_t t = 0; t < entity_types.size(); ++t) {
+        if (group_dim == dim) {
+          for (const std::size_t tag : tags[t]) {
+            selected.push_back(elements.particle_of_element.at(tag));
+          }
+          continue;
+        }
+        const std::size_t per = tags[t].empty() ? 0 : nodes[t].size() / tags[t].size();
+        for (std::size_t e = 0; e < tags[t].size(); ++e) {
+          const auto first = nodes[t].begin() + static_cast<long>(e * per);
+          const auto found = particles_at_node.find(*first);
+          if (found == particles_at_node.end()) {
+            continue;
+          }
+          for (const std::uint32_t p : found->second) {
+            const auto begin = elements.nodes.begin() + static_cast<long>(elements.offsets[p]);
+            const auto end = elements.nodes.begin() + static_cast<long>(elements.offsets[p + 1]);
+            if (std::all_of(first, first + static_cast<long>(per),
+                            [&](std::size_t v) { return std::find(begin, end, v) != end; })) {
+              selected.push_back(p);
+            }
+          }
+        }
+      }
+    }
+    std::sort(selected.begin(), selected.end());
+    selected.erase(std::unique(selected.begin(), selected.end()), selected.end());
+  }
+}
+
+/// The particles of the current model's elements of dimension `dim`, and its physical groups.
 MeshBody extract_body(GmshSession& s, int dim, double thickness) {
   MeshBody body;
   body.path = s.path();
@@ -170,158 +336,9 @@ MeshBody extract_body(GmshSession& s, int dim, double thickness) {
       }
     }
   }
-  std::vector<int> types;
-  s.run("listing the elements", [&] { gmsh::model::mesh::getElementTypes(types, dim); });
-  if (types.empty()) {
-    s.fail(fmt::format("has no {}D elements (a body needs {})", dim,
-                       dim == 3 ? "tetrahedra, hexahedra, prisms or pyramids"
-                                : "triangles or quadrangles"));
-  }
-
-  struct Element {
-    std::size_t tag;
-    std::string_view type;
-    double orientation; // 3D: the signed volume; 2D: the corners' signed area
-  };
-  std::vector<Element> elements;
-  std::vector<std::size_t> element_nodes; // every node of every element, in particle order
-  std::vector<std::size_t> element_offsets{0};
-  std::unordered_map<std::size_t, std::uint32_t> particle_of_element;
-  std::vector<std::string> type_names;
-  type_names.reserve(types.size()); // string_views into them stay valid
-  for (const int type : types) {
-    std::string name;
-    int type_dim = 0, order = 0, nodes_per = 0, primary = 0;
-    std::vector<double> local;
-    std::vector<std::size_t> tags, nodes;
-    std::vector<double> points, weights, jacobians, det, at;
-    s.run("reading the elements", [&] {
-      gmsh::model::mesh::getElementProperties(type, name, type_dim, order, nodes_per, local,
-                                              primary);
-      gmsh::model::mesh::getElementsByType(type, tags, nodes);
-      // Exact for the volume and the first moment of elements up to this order.
-      gmsh::model::mesh::getIntegrationPoints(type, fmt::format("Gauss{}", std::max(2, 3 * order)),
-                                              points, weights);
-      gmsh::model::mesh::getJacobians(type, points, jacobians, det, at);
-    });
-    type_names.push_back(name);
-    const std::size_t g = weights.size();
-    const auto n = static_cast<std::size_t>(nodes_per);
-    for (std::size_t e = 0; e < tags.size(); ++e) {
-      double v = 0;
-      Vec3 moment{0, 0, 0};
-      for (std::size_t q = 0; q < g; ++q) {
-        const double w = weights[q] * det[e * g + q];
-        v += w;
-        for (std::size_t a = 0; a < 3; ++a) {
-          moment[a] += w * at[3 * (e * g + q) + a];
-        }
-      }
-      double orientation = v;
-      if (dim == 2) {
-        std::vector<Vec3> corners;
-        for (std::size_t c = 0; c < static_cast<std::size_t>(primary); ++c) {
-          corners.push_back(node.at(nodes[e * n + c]));
-        }
-        orientation = signed_area(corners);
-      }
-      const double volume = dim == 2 ? std::abs(v) * thickness : v;
-      particle_of_element.emplace(tags[e], static_cast<std::uint32_t>(elements.size()));
-      elements.push_back({tags[e], type_names.back(), orientation});
-      body.cloud.position.push_back({moment[0] / v, moment[1] / v, moment[2] / v});
-      body.cloud.volume.push_back(volume);
-      element_nodes.insert(element_nodes.end(), nodes.begin() + static_cast<long>(e * n),
-                           nodes.begin() + static_cast<long>((e + 1) * n));
-      element_offsets.push_back(element_nodes.size());
-    }
-  }
-
-  // Inverted and degenerate elements. In 3D Gmsh's Jacobian is signed; in 2D it is not, and a
-  // plane mesh may run either way round, so an element turned against the mesh's majority is
-  // the inverted one.
-  double mean = 0;
-  long long positive = 0;
-  for (const Element& e : elements) {
-    mean += std::abs(e.orientation) / static_cast<double>(elements.size());
-    positive += e.orientation > 0 ? 1 : 0;
-  }
-  const double sign = dim == 3 || 2 * positive >= static_cast<long long>(elements.size()) ? 1 : -1;
-  const double zero = 1e-9 * mean;
-  for (std::size_t i = 0; i < elements.size(); ++i) {
-    const Element& e = elements[i];
-    const Vec3& at = body.cloud.position[i];
-    if (!(std::abs(e.orientation) > zero) || !std::isfinite(body.cloud.position[i][0])) {
-      s.fail(fmt::format("element {} ({}) at {} has zero {}", e.tag, e.type, point_text(at),
-                         dim == 3 ? "volume" : "area"));
-    }
-    if (sign * e.orientation < 0) {
-      s.fail(fmt::format("element {} ({}) at {} is inverted ({} {:.6g}{})", e.tag, e.type,
-                         point_text(at), dim == 3 ? "signed volume" : "signed area", e.orientation,
-                         dim == 3 ? "" : ", against the orientation of the mesh's other elements"));
-    }
-  }
-
-  // Physical groups.
-  std::vector<std::pair<int, int>> groups;
-  s.run("reading the physical groups", [&] { gmsh::model::getPhysicalGroups(groups); });
-  std::unordered_map<std::size_t, std::vector<std::uint32_t>> particles_at_node;
-  if (std::any_of(groups.begin(), groups.end(), [&](const auto& g) { return g.first < dim; })) {
-    for (std::uint32_t p = 0; p < elements.size(); ++p) {
-      for (std::size_t k = element_offsets[p]; k < element_offsets[p + 1]; ++k) {
-        auto& list = particles_at_node[element_nodes[k]];
-        if (list.empty() || list.back() != p) {
-          list.push_back(p);
-        }
-      }
-    }
-  }
-  for (const auto& [group_dim, group_tag] : groups) {
-    if (group_dim > dim) {
-      continue;
-    }
-    std::string name;
-    std::vector<int> entities;
-    s.run("reading the physical groups", [&] {
-      gmsh::model::getPhysicalName(group_dim, group_tag, name);
-      gmsh::model::getEntitiesForPhysicalGroup(group_dim, group_tag, entities);
-    });
-    if (name.empty()) {
-      name = fmt::format("{}:{}", group_dim, group_tag);
-    }
-    std::vector<std::uint32_t>& selected = body.groups[name];
-    for (const int entity : entities) {
-      std::vector<int> entity_types;
-      std::vector<std::vector<std::size_t>> tags, nodes;
-      s.run("reading the physical groups",
-            [&] { gmsh::model::mesh::getElements(entity_types, tags, nodes, group_dim, entity); });
-      for (std::size_t t = 0; t < entity_types.size(); ++t) {
-        if (group_dim == dim) {
-          for (const std::size_t tag : tags[t]) {
-            selected.push_back(particle_of_element.at(tag));
-          }
-          continue;
-        }
-        const std::size_t per = tags[t].empty() ? 0 : nodes[t].size() / tags[t].size();
-        for (std::size_t e = 0; e < tags[t].size(); ++e) {
-          const auto first = nodes[t].begin() + static_cast<long>(e * per);
-          const auto found = particles_at_node.find(*first);
-          if (found == particles_at_node.end()) {
-            continue;
-          }
-          for (const std::uint32_t p : found->second) {
-            const auto begin = element_nodes.begin() + static_cast<long>(element_offsets[p]);
-            const auto end = element_nodes.begin() + static_cast<long>(element_offsets[p + 1]);
-            if (std::all_of(first, first + static_cast<long>(per),
-                            [&](std::size_t v) { return std::find(begin, end, v) != end; })) {
-              selected.push_back(p);
-            }
-          }
-        }
-      }
-    }
-    std::sort(selected.begin(), selected.end());
-    selected.erase(std::unique(selected.begin(), selected.end()), selected.end());
-  }
+  const Elements elements = read_elements(s, dim, thickness, node, body);
+  check_orientation(s, dim, elements, body);
+  read_groups(s, dim, elements, body);
   body.warnings = std::move(s.warnings);
   return body;
 }
