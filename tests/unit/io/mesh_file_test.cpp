@@ -239,9 +239,15 @@ TEST_F(MeshFile, HexahedraAndTetrahedraGiveOneParticlePerElementWithTheirVolume)
     for (std::size_t a = 0; a < 3; ++a) {
       EXPECT_NEAR(mean[a] / (size * size * size), size / 2, 1e-12 * size);
     }
-    if (!tets) {
-      EXPECT_NEAR(body.cloud.position[0][0], size / 6, 1e-15);
-      EXPECT_NEAR(body.cloud.volume[0], 1e-3, 1e-15);
+    if (!tets) { // each hexahedron's particle at its cell's centre, with the cell's volume
+      const double h = size / 3;
+      for (std::size_t i = 0; i < body.cloud.count(); ++i) {
+        for (std::size_t a = 0; a < 3; ++a) {
+          const double cells = body.cloud.position[i][a] / h - 0.5;
+          EXPECT_NEAR(cells, std::round(cells), 1e-12);
+        }
+        EXPECT_NEAR(body.cloud.volume[i], h * h * h, 1e-12 * h * h * h);
+      }
     }
   }
 }
