@@ -40,6 +40,9 @@ void print_table(const std::string& scene_path, const Model& model, const Resour
   fmt::print("horizon            {:.6g} m\n", model.horizon());
   fmt::print("stable dt (eq. 31) {:.6g} s\n", dt);
   fmt::print("effects            {}\n", fmt::join(model.effects.names(), ", "));
+  if (const std::string note = mesh_corrections_note(model.spec); !note.empty()) {
+    fmt::print("corrections        {}\n", note);
+  }
 }
 
 int info(const InfoArgs& a) {
@@ -70,6 +73,9 @@ int info(const InfoArgs& a) {
   }
   j["dt_stable"] = dt;
   j["effects"] = Json::array_of(model.effects.names());
+  if (const std::string note = mesh_corrections_note(model.spec); !note.empty()) {
+    j["mesh_corrections"] = note;
+  }
   fmt::print("{}", j.dump());
   return 0;
 }

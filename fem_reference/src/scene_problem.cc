@@ -100,6 +100,15 @@ void check_supported(const pd::Scene& scene) {
     throw std::runtime_error("pd-fem --scene: the scene has the pre-crack '" +
                              m.cracks.front().name +
                              "'; the FE reference represents 2D cracks (segments) only");
+  // The FE domain is built from boxes and shapes; a body of given particles has only their
+  // bounding box as its region, which is not its shape.
+  for (const pd::BodySpec& b : m.bodies)
+    if (b.points)
+      throw std::runtime_error(
+          "pd-fem --scene: body '" + b.name + "' is " +
+          (b.mesh ? "the mesh of '" + b.mesh_file +
+                        "'; an FE reference on the same geometry is not built yet"
+                  : std::string("given as particles; the FE reference needs its shape")));
   if (m.lattice.convention != pd::LatticeConvention::cell_centered)
     std::cerr << "pd-fem: warning: node-based lattice: its particles stand λ/2 beyond the boxes' "
                  "faces; the FE body is the boxes themselves\n";

@@ -67,6 +67,9 @@ Json run_summary(const Scene& scene, const Simulation& sim, const RunOutcome& ou
   j["integrator"] = to_string(scene.solver.integrator);
   j["kernel"] = sim.forces().description();
   j["effects"] = Json::array_of(model.effects.names());
+  if (const std::string note = mesh_corrections_note(scene.model); !note.empty()) {
+    j["mesh_corrections"] = note;
+  }
   j["steps"] = out.result.steps;
   j["time"] = out.result.time;
   j["dt"] = out.result.dt;

@@ -260,7 +260,8 @@ EffectSet kernel_effects(const ModelSpec& spec, std::size_t materials_used) {
   // The fibre model's field is the bound of fibre_stiffness_bound, one value per bond.
   effects.per_bond_field = spec.effects.bond_model == BondModel::virtual_fibres ||
                            materials_used > 1 || spec.corrections().corrects() ||
-                           spec.lattice.volume_variation > 0 || weighted_mirrors;
+                           spec.has_mesh_body() || spec.lattice.volume_variation > 0 ||
+                           weighted_mirrors;
   effects.body_force = std::any_of(spec.loads.begin(), spec.loads.end(), [](const LoadSpec& l) {
     return l.load.kind == BoxRegionLoad::Kind::body;
   });
@@ -683,6 +684,20 @@ Model build_model(const ModelSpec& spec, ParticleSet particles) {
   const int dim = spec.dimension.dim;
   const double delta = spec.lattice.horizon();
   m.particles = std::move(particles);
+  // Under the bond-based model a mesh body's particles take the lattice's horizon, like lattice
+  // particles; only the virtual-fibre model gives particles horizons of their own.
+  if (spec.effects.bond_model != BondModel::virtual_fibres &&
+      std::all_of(spec.bodies.begin(), spec.bodies.end(),
+                  [](const BodySpec& b) { return !b.points || b.mesh; })) {
+    m.particles.particle_size.clear();
+    const char* why = spec.has_mesh_body() ? lattice_only(spec.surface_correction) : nullptr;
+    why = why != nullptr || !spec.has_mesh_body() ? why : lattice_only(spec.volume_correction);
+    if (why != nullptr) {
+      throw std::runtime_error(std::string("a mesh body is an unstructured set, but a correction "
+                                           "of the model needs a lattice: ") +
+                               why);
+    }
+  }
   const std::size_t body_count = m.particles.size();
   if (body_count == 0) {
     throw std::runtime_error("the bodies contain no lattice particle");

@@ -1,9 +1,11 @@
 // Geometry primitives: points, axis-aligned boxes, shapes, and regions made of them.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
@@ -123,9 +125,14 @@ struct Region {
   std::vector<Box> boxes;
   std::vector<Shape> shapes; ///< added to the union
   std::vector<Shape> minus;  ///< taken out of it: holes, notches, cuts
+  /// Added to the union: particles named one by one (a mesh's physical group, io/mesh_file.hpp),
+  /// sorted. They are copies of a mesh body's particle positions, so membership is exact
+  /// equality: no tolerance could separate an unstructured set's neighbours reliably.
+  std::shared_ptr<const std::vector<Vec3>> points;
+  std::string group; ///< the physical group `points` came from ("" if none), for messages
 
   bool contains(const Vec3& p, int dim, double tol) const {
-    bool inside = false;
+    bool inside = points && std::binary_search(points->begin(), points->end(), p);
     for (const Box& b : boxes) {
       if (b.contains(p, dim, tol)) {
         inside = true;
@@ -146,12 +153,22 @@ struct Region {
     return true;
   }
   /// Whether the region is a plain union of boxes (what the box-only checks can handle exactly).
-  bool only_boxes() const { return shapes.empty() && minus.empty(); }
-  /// Boxes that together cover the region: its boxes and the bounds of its shapes.
+  bool only_boxes() const { return shapes.empty() && minus.empty() && !points; }
+  /// Boxes that together cover the region: its boxes, the bounds of its shapes and of its points.
   std::vector<Box> cover(int dim) const {
     std::vector<Box> out = boxes;
     for (const Shape& s : shapes) {
       out.push_back(s.bounds(dim));
+    }
+    if (points && !points->empty()) {
+      Box b{points->front(), points->front()};
+      for (const Vec3& p : *points) {
+        for (std::size_t a = 0; a < 3; ++a) {
+          b.lo[a] = std::min(b.lo[a], p[a]);
+          b.hi[a] = std::max(b.hi[a], p[a]);
+        }
+      }
+      out.push_back(b);
     }
     return out;
   }

@@ -60,6 +60,13 @@ struct BodySpec {
   int material = 0;
   /// A body of given particles (a particle file) instead of the lattice points of `region`.
   std::shared_ptr<const PointCloud> points;
+  /// `points` are a mesh's elements (io/mesh_file.hpp): under the bond-based model they take the
+  /// lattice's horizon, as lattice particles do, instead of one of their own.
+  bool mesh = false;
+  /// A mesh body's file (a mesh, or the geometry Gmsh meshed), as the scene resolved it: the FE
+  /// reference builds its domain from the same file.
+  std::string mesh_file;
+  bool mesh_is_geometry = false; ///< `mesh_file` is a geometry file meshed at lattice.spacing
 
   bool operator==(const BodySpec&) const = default;
 };

@@ -132,6 +132,16 @@ struct ModelSpec {
   VolumeCorrection volume_correction = VolumeCorrection::gradient;
   MirrorCoupling mirror_coupling = MirrorCoupling::quadratic;
 
+  /// Whether a body is a mesh's elements (BodySpec::mesh): an unstructured set.
+  bool has_mesh_body() const {
+    for (const BodySpec& b : bodies) {
+      if (b.mesh) {
+        return true;
+      }
+    }
+    return false;
+  }
+
   /// What the bond corrections read of the model (corrections.hpp). The fibre model reads
   /// `gradient` as the moment weights (fibre_arms.hpp), so its ghost layers reach the whole
   /// horizon, not only the bonds that `gradient` weights keep stiff.
@@ -142,6 +152,38 @@ struct ModelSpec {
             fibres ? VolumeCorrection::moment : volume_correction};
   }
 };
+
+/// The corrections of a bond-based model with a mesh body, until particles get weights of their
+/// own neighbourhood. The defaults assume a lattice: ghost sites are lattice sites outside the
+/// body's boxes, and `gradient` (also `moment`, `exact`) weighs a bond by the lattice offset it
+/// rounds to, so on an unstructured set both would be wrong without a sign of it. `tensor` is
+/// computed from each particle's own bonds against the continuum (corrections.hpp), so it holds
+/// on any set: the bulk's irregular quadrature and the free surfaces are both corrected for
+/// uniform strain, not in bending. `none` leaves the neighbours' volumes as the mesh gives them.
+inline constexpr SurfaceCorrection mesh_surface_correction = SurfaceCorrection::tensor;
+inline constexpr VolumeCorrection mesh_volume_correction = VolumeCorrection::none;
+
+/// Whether a correction needs the lattice (a mesh body cannot take it): what it says why, or
+/// nullptr.
+inline const char* lattice_only(SurfaceCorrection s) {
+  return s == SurfaceCorrection::ghost ? "ghost sites are lattice sites outside the bodies' boxes"
+                                       : nullptr;
+}
+inline const char* lattice_only(VolumeCorrection v) {
+  switch (v) {
+  case VolumeCorrection::gradient:
+  case VolumeCorrection::moment:
+    return "its weights are per lattice offset, looked up by rounding a bond to the lattice";
+  case VolumeCorrection::exact:
+    return "it cuts the neighbour's cubic lattice cell by the horizon";
+  default:
+    return nullptr;
+  }
+}
+
+/// For `pd info` and the run summary: a bond-based model with a mesh body names the corrections it
+/// runs with and why they are not the lattice defaults; "" for any other model.
+std::string mesh_corrections_note(const ModelSpec& spec);
 
 struct Model {
   ModelSpec spec;

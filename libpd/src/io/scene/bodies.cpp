@@ -2,6 +2,7 @@
 #include "bind.hpp"
 #include "libpd/core/memory.hpp"
 #include "libpd/discretisation/graded_set.hpp"
+#include "libpd/io/mesh_file.hpp"
 #include "libpd/io/particle_file.hpp"
 #include "sections.hpp"
 
@@ -108,6 +109,23 @@ constexpr Key body_keys[] = {
      .need = Need::one_of,
      .group = 1,
      .show = Show::commented},
+    {.name = "mesh",
+     .type = Type::string,
+     .doc = "instead of box: a mesh file (.msh, or another format Gmsh reads): one particle per "
+            "element at its centroid with its volume (2D: area × thickness); relative to the "
+            "scene file",
+     .example = "part.msh",
+     .need = Need::one_of,
+     .group = 1,
+     .show = Show::commented},
+    {.name = "geometry",
+     .type = Type::string,
+     .doc = "instead of box: a geometry file (.geo, .step, .iges, .brep; 3D also a closed .stl) "
+            "meshed by Gmsh with elements no larger than lattice.spacing, then read as 'mesh'",
+     .example = "part.step",
+     .need = Need::one_of,
+     .group = 1,
+     .show = Show::commented},
     {.name = "graded",
      .type = Type::section,
      .doc = "instead of box: a generated graded particle set (Olsson et al. 2021, §10.2); 2D, "
@@ -140,6 +158,61 @@ void read_particle_body(Reader& r, const Fields& f, BodySpec& body, Marks& marks
     }
   }
   body.region.boxes = {bounds};
+  marks.body_box_nodes.push_back({e->at()});
+}
+
+/// The particles' bounding box: the region supports, loads and probes are checked against.
+Box bounding_box(const PointCloud& points) {
+  Box bounds{points.position.front(), points.position.front()};
+  for (const Vec3& p : points.position) {
+    for (std::size_t a = 0; a < 3; ++a) {
+      bounds.lo[a] = std::min(bounds.lo[a], p[a]);
+      bounds.hi[a] = std::max(bounds.hi[a], p[a]);
+    }
+  }
+  return bounds;
+}
+
+/// A body from a mesh, or from a geometry file meshed at the lattice spacing (io/mesh_file.hpp):
+/// errors name the file and the element; Gmsh's warnings become the scene's.
+void read_mesh_body(Reader& r, const Fields& f, const ModelSpec& model, BodySpec& body,
+                    Marks& marks) {
+  const bool meshed = f.has("mesh");
+  const Entry* e = f.find(meshed ? "mesh" : "geometry");
+  std::filesystem::path path = *r.string(f, meshed ? "mesh" : "geometry");
+  if (path.is_relative()) {
+    path = std::filesystem::path(r.file()).parent_path() / path;
+  }
+  const int dim = model.dimension.dim;
+  if (dim == 1) {
+    r.fail(e->at(), "a body from a mesh needs dimension 2 or 3", "fill a box with the lattice");
+  }
+  MeshBody mesh;
+  try {
+    mesh = meshed ? read_mesh_file(path.string(), dim, model.dimension.thickness)
+                  : mesh_geometry_file(path.string(), dim, model.dimension.thickness,
+                                       model.lattice.spacing);
+  } catch (const MeshFileError& error) {
+    r.fail(e->at(), error.what(),
+           mesh_files_supported() ? "fix the mesh or the geometry (docs/scenes.md, meshes)"
+                                  : "build libpd with Gmsh (Debian: libgmsh-dev)");
+  }
+  for (const std::string& w : mesh.warnings) {
+    r.warn(e->at(), w);
+  }
+  for (const auto& [name, particles] : mesh.groups) {
+    std::vector<Vec3>& points = r.mesh_groups[name];
+    for (const std::uint32_t p : particles) {
+      points.push_back(mesh.cloud.position[p]);
+    }
+    std::sort(points.begin(), points.end());
+  }
+  r.mesh_files.push_back(path.string());
+  body.points = std::make_shared<const PointCloud>(std::move(mesh.cloud));
+  body.mesh = true;
+  body.mesh_file = path.string();
+  body.mesh_is_geometry = !meshed;
+  body.region.boxes = {bounding_box(*body.points)};
   marks.body_box_nodes.push_back({e->at()});
 }
 
@@ -251,20 +324,25 @@ void read_bodies(Reader& r, ModelSpec& model, Marks& marks) {
              suggestion(material, material_names, "materials defined"));
     }
     body.material = static_cast<int>(found - material_names.begin());
-    if (f.has("particles") || f.has("graded")) {
-      const bool file = f.has("particles");
-      if (file) {
+    if (f.has("particles") || f.has("graded") || f.has("mesh") || f.has("geometry")) {
+      const char* key = f.has("particles") ? "particles"
+                        : f.has("graded")  ? "graded"
+                        : f.has("mesh")    ? "mesh"
+                                           : "geometry";
+      if (f.has("particles")) {
         read_particle_body(r, f, body, marks);
-      } else {
+      } else if (f.has("graded")) {
         read_graded_body(r, f, model, body, marks);
+      } else {
+        read_mesh_body(r, f, model, body, marks);
       }
-      marks.body_nodes.push_back(f.find(file ? "particles" : "graded")->at());
+      marks.body_nodes.push_back(f.find(key)->at());
       if (const Entry* minus = f.find("minus")) {
         r.fail(minus->name,
                fmt::format("body '{}' is given as particles: 'minus' applies only to lattice "
                            "bodies",
                            body.name),
-               "remove the particles inside the hole from the file, or drop 'minus'");
+               "remove the particles inside the hole from the file (or the mesh), or drop 'minus'");
       }
       model.bodies.push_back(std::move(body));
       continue;

@@ -10,6 +10,7 @@ constexpr Key load_keys[] = {
     name_key("unique name of the load", "pull"),
     box_key("region whose particles (of any body) carry the load", "[[0.99, 0, 0], [1, 0.1, 0.1]]"),
     boxes_key("instead of box: a union of boxes", "[[[0.99, 0, 0], [1, 0.1, 0.1]]]"),
+    group_key("instead of box: the particles of a mesh body's physical group"),
     {.name = "point",
      .type = Type::vector,
      .doc = "instead of box: a point load, shared by the body particles nearest the point (the "

@@ -81,11 +81,33 @@ void read_model_options(Reader& r, ModelSpec& model, Marks& marks) {
   r.read_bound(f, model);
 }
 
+void settle_mesh_corrections(Reader& r, ModelSpec& model, const Marks& marks) {
+  if (!model.has_mesh_body() || model.effects.bond_model == BondModel::virtual_fibres) {
+    return; // the fibre model gives a point cloud's particles weights of their own already
+  }
+  const auto settle = [&](auto& correction, auto mesh_default, std::string_view key) {
+    const Entry* given = marks.model.find(key);
+    if (given == nullptr) {
+      correction = mesh_default;
+      return;
+    }
+    if (const char* why = lattice_only(correction)) {
+      r.fail(given->at(),
+             fmt::format("{} '{}' needs a lattice ({}), and a mesh body is an unstructured set",
+                         key, name_of(correction), why),
+             fmt::format("remove '{}': with a mesh body it is '{}' (docs/scenes.md, meshes)", key,
+                         name_of(mesh_default)));
+    }
+  };
+  settle(model.surface_correction, mesh_surface_correction, "surface_correction");
+  settle(model.volume_correction, mesh_volume_correction, "volume_correction");
+}
+
 void check_bond_model(Reader& r, const Scene& scene, const Marks& marks) {
   const ModelSpec& model = scene.model;
   if (model.effects.bond_model != BondModel::virtual_fibres) {
     for (std::size_t i = 0; i < model.bodies.size(); ++i) {
-      if (model.bodies[i].points) {
+      if (model.bodies[i].points && !model.bodies[i].mesh) {
         r.fail(marks.body_box_nodes.at(i).front(),
                fmt::format("body '{}' is given as particles, which only the virtual-fibre model "
                            "runs (each particle its own size and horizon)",

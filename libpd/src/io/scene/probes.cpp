@@ -20,6 +20,7 @@ constexpr Key probe_keys[] = {
             "[[0.99, 0.04, 0.04], [1, 0.06, 0.06]]", Show::commented),
     boxes_key("instead of point: the average over a union of boxes",
               "[[[0.99, 0.04, 0.04], [1, 0.06, 0.06]]]"),
+    group_key("instead of point: the average over a mesh body's physical group"),
     {.name = "support",
      .type = Type::string,
      .doc = "instead of point: the support whose reaction is recorded, the force it exerts on "

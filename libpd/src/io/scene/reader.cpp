@@ -501,6 +501,30 @@ Box Reader::box(const YAML::Node& n, const std::string& label) const {
 
 Reader::RegionRead Reader::region(const Fields& f) const {
   RegionRead r;
+  if (const Entry* e = f.has("group") ? f.find("group") : nullptr) {
+    r.node = e->at();
+    const std::string name = *string(f, "group");
+    const auto found = mesh_groups.find(name);
+    if (found == mesh_groups.end()) {
+      std::string names;
+      for (const auto& [n, points] : mesh_groups) {
+        names += fmt::format("{}'{}'", names.empty() ? "" : ", ", n);
+      }
+      std::string files;
+      for (const std::string& file : mesh_files) {
+        files += fmt::format("{}{}", files.empty() ? "" : ", ", file);
+      }
+      fail(r.node,
+           fmt::format("{}: no physical group '{}' in {}", f.label("group"), name,
+                       files.empty() ? std::string("the scene (it has no mesh body)") : files),
+           names.empty() ? std::string("groups come from 'mesh:' or 'geometry:' bodies' physical "
+                                       "groups; this scene has none")
+                         : "the mesh bodies' groups: " + names);
+    }
+    r.region.points = std::make_shared<const std::vector<Vec3>>(found->second);
+    r.region.group = name;
+    return r;
+  }
   if (const Entry* e = lookup(f, "box")) {
     r.node = e->at();
     r.region.boxes.push_back(box(r.node, f.label("box")));

@@ -11,6 +11,7 @@
 #include <cmath>
 #include <fmt/format.h>
 #include <limits>
+#include <map>
 #include <optional>
 #include <span>
 #include <stdexcept>
@@ -212,8 +213,13 @@ public:
     YAML::Node node;                   ///< the box or boxes value
   };
 
-  /// The `box` or `boxes` key of a section that declares them (exactly one is present).
+  /// The `box`, `boxes` or `group` key of a section that declares them (exactly one is present).
   RegionRead region(const Fields& f) const;
+
+  /// The physical groups of the mesh bodies read so far (name → their particles' positions,
+  /// sorted): what a `group` key names. A name two bodies share names both bodies' particles.
+  std::map<std::string, std::vector<Vec3>> mesh_groups;
+  std::vector<std::string> mesh_files; ///< the files of the mesh bodies read so far, for messages
 
   int component(const YAML::Node& n, const std::string& label) const;
 

@@ -42,6 +42,17 @@ constexpr Key box_key(std::string_view doc, std::string_view example, Show show 
           .group = 1,
           .show = show};
 }
+/// `group`: a physical group of a mesh body (io/mesh_file.hpp), one of the alternatives of
+/// group 1, beside `box`.
+constexpr Key group_key(std::string_view doc) {
+  return {.name = "group",
+          .type = Type::string,
+          .doc = doc,
+          .example = "clamp",
+          .need = Need::one_of,
+          .group = 1,
+          .show = Show::commented};
+}
 constexpr Key boxes_key(std::string_view doc, std::string_view example) {
   return {.name = "boxes",
           .type = Type::boxes,
@@ -125,6 +136,9 @@ void check_unique(const Reader& r, std::map<std::string, YAML::Node>& seen, cons
 void check_consistency(Reader& r, const Scene& scene, const Marks& marks);
 /// What the virtual-fibre model cannot run with (model_options.cpp).
 void check_bond_model(Reader& r, const Scene& scene, const Marks& marks);
+/// After the bodies: a bond-based model with a mesh body takes mesh_surface_correction and
+/// mesh_volume_correction (model.hpp) for the keys left out, and refuses lattice-only ones.
+void settle_mesh_corrections(Reader& r, ModelSpec& model, const Marks& marks);
 /// Checks against the lattice, from the estimate of its size first, then by counting lattice
 /// points in regions, last (mirror supports) by generating it: the particles, if generated.
 std::optional<ParticleSet> check_against_lattice(Reader& r, const Scene& scene, const Marks& marks);

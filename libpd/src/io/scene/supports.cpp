@@ -21,6 +21,8 @@ constexpr Key support_keys[] = {
                             "[[0, 0, 0], [0.03, 0.1, 0.1]]")),
     optional_region(
         boxes_key("instead of box: a union of boxes", "[[[0, 0, 0], [0.03, 0.1, 0.1]]]")),
+    optional_region(group_key("instead of box: the particles of a mesh body's physical group "
+                              "(fixed or displaced; a mirror or symmetry plane needs a box)")),
     {.name = "fixed",
      .type = Type::components,
      .doc = "components held at zero displacement",
@@ -67,7 +69,8 @@ void read_supports(Reader& r, ModelSpec& model, Marks& marks) {
     s.name = *r.string(f, "name");
     check_unique(r, names, s.name, f.find("name")->at(), "support");
     Reader::RegionRead region;
-    if (f.has("box") || f.has("boxes")) {
+    const bool has_region = f.has("box") || f.has("boxes") || f.has("group");
+    if (has_region) {
       region = r.region(f);
       s.region = region.region;
     }
@@ -129,12 +132,19 @@ void read_supports(Reader& r, ModelSpec& model, Marks& marks) {
              "add 'fixed: [x, ...]', 'displacement: {x: value}', 'mirror: {x: value}' or "
              "'symmetry: {x: value}'");
     }
-    if (!f.has("box") && !f.has("boxes") && !s.symmetric()) {
+    if (f.has("group") && (s.mirrors() || s.symmetric())) {
+      r.fail(region.node,
+             fmt::format("support '{}' mirrors or is a symmetry plane, which needs the box behind "
+                         "its face, not a physical group",
+                         s.name),
+             "give the support a 'box', or hold the group with 'fixed' or 'displacement'");
+    }
+    if (!has_region && !s.symmetric()) {
       r.fail(f.anchor, fmt::format("missing 'box' or 'boxes' in support '{}'", s.name),
              "add the region whose particles are supported, e.g. 'box: [[lo], [hi]]' (only a "
              "symmetry support may leave it out)");
     }
-    if (s.region.boxes.empty()) {
+    if (!has_region) {
       model.supports.push_back(std::move(s));
       continue;
     }

@@ -120,6 +120,7 @@ Scene read_scene(const YAML::Node& root, Reader& r) {
   read_model_options(r, scene.model, marks); // first: the bond model decides what ν means
   read_materials(r, scene.model, marks);
   read_bodies(r, scene.model, marks);
+  settle_mesh_corrections(r, scene.model, marks);
   read_supports(r, scene.model, marks);
   read_loads(r, scene.model, marks);
   read_cracks(r, scene.model, marks);

@@ -1,0 +1,473 @@
+// Bodies from meshes and geometry files (io/mesh_file.hpp): one particle per element with its
+// volume, physical groups as particle sets and as scene regions, and each bad input refused with
+// the file and the element or group named. The meshes are written here as .msh text (format 2.2),
+// so the element counts and volumes are known without Gmsh.
+#include "libpd/io/mesh_file.hpp"
+#include "libpd/io/scene.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <gtest/gtest.h>
+#include <numeric>
+#include <set>
+#include <sstream>
+#include <string>
+#include <tuple>
+#include <vector>
+
+#ifdef LIBPD_TEST_GMSH
+#include <gmsh.h>
+#endif
+
+namespace {
+
+namespace fs = std::filesystem;
+
+/// A fresh folder for one test's files.
+fs::path temp_folder(const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() / ("libpd_mesh_file_test_" + name);
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+std::string write(const fs::path& path, const std::string& text) {
+  std::ofstream(path) << text;
+  return path.string();
+}
+
+struct Element {
+  int type; // Gmsh: 1 line, 2 triangle, 3 quadrangle, 4 tetrahedron, 5 hexahedron
+  int physical;
+  std::vector<std::size_t> nodes; // 1-based
+};
+
+/// A .msh 2.2 file of these nodes, elements and physical names ({dim, tag, name}).
+struct Msh {
+  std::vector<std::array<double, 3>> nodes;
+  std::vector<Element> elements;
+  std::vector<std::tuple<int, int, std::string>> names;
+
+  std::string text() const {
+    std::ostringstream s;
+    s.precision(17);
+    s << "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n";
+    if (!names.empty()) {
+      s << "$PhysicalNames\n" << names.size() << "\n";
+      for (const auto& [dim, tag, name] : names) {
+        s << dim << " " << tag << " \"" << name << "\"\n";
+      }
+      s << "$EndPhysicalNames\n";
+    }
+    s << "$Nodes\n" << nodes.size() << "\n";
+    for (std::size_t i = 0; i < nodes.size(); ++i) {
+      s << i + 1 << " " << nodes[i][0] << " " << nodes[i][1] << " " << nodes[i][2] << "\n";
+    }
+    s << "$EndNodes\n$Elements\n" << elements.size() << "\n";
+    for (std::size_t i = 0; i < elements.size(); ++i) {
+      const Element& e = elements[i];
+      // Elementary entity = physical tag: one entity per group keeps the file valid.
+      s << i + 1 << " " << e.type << " 2 " << e.physical << " " << e.physical;
+      for (const std::size_t n : e.nodes) {
+        s << " " << n;
+      }
+      s << "\n";
+    }
+    s << "$EndElements\n";
+    return s.str();
+  }
+};
+
+double det3(const std::array<double, 3>& a, const std::array<double, 3>& b,
+            const std::array<double, 3>& c) {
+  return a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) +
+         a[2] * (b[0] * c[1] - b[1] * c[0]);
+}
+
+/// A box [0, size]³ cut into n³ cells: hexahedra, or six tetrahedra per cell (Kuhn's split, each
+/// written with a positive volume). Physical groups: 3 "front" (3D: the first layer of cells
+/// along x), 4 "back" (the last layer), 1 "body" (the others), 2 "left" (the quadrangles of the
+/// face x = 0, hexahedra only).
+Msh box_mesh(std::size_t n, double size, bool tets) {
+  Msh m;
+  const double h = size / static_cast<double>(n);
+  const auto id = [n](std::size_t i, std::size_t j, std::size_t k) {
+    return 1 + i + (n + 1) * (j + (n + 1) * k);
+  };
+  for (std::size_t k = 0; k <= n; ++k) {
+    for (std::size_t j = 0; j <= n; ++j) {
+      for (std::size_t i = 0; i <= n; ++i) {
+        m.nodes.push_back(
+            {static_cast<double>(i) * h, static_cast<double>(j) * h, static_cast<double>(k) * h});
+      }
+    }
+  }
+  for (std::size_t k = 0; k < n; ++k) {
+    for (std::size_t j = 0; j < n; ++j) {
+      for (std::size_t i = 0; i < n; ++i) {
+        const int group = i == 0 ? 3 : i + 1 == n ? 4 : 1;
+        const std::array<std::size_t, 8> c{
+            id(i, j, k),     id(i + 1, j, k),     id(i + 1, j + 1, k),     id(i, j + 1, k),
+            id(i, j, k + 1), id(i + 1, j, k + 1), id(i + 1, j + 1, k + 1), id(i, j + 1, k + 1)};
+        if (!tets) {
+          m.elements.push_back({5, group, std::vector<std::size_t>(c.begin(), c.end())});
+          continue;
+        }
+        // Kuhn: the paths from (i, j, k) to (i+1, j+1, k+1) along the axes in every order.
+        std::array<int, 3> order{0, 1, 2};
+        do {
+          std::array<std::size_t, 3> at{i, j, k};
+          std::vector<std::size_t> t{id(at[0], at[1], at[2])};
+          for (const int a : order) {
+            ++at[static_cast<std::size_t>(a)];
+            t.push_back(id(at[0], at[1], at[2]));
+          }
+          const auto& p0 = m.nodes[t[0] - 1];
+          std::array<std::array<double, 3>, 3> e{};
+          for (std::size_t q = 0; q < 3; ++q) {
+            for (std::size_t a = 0; a < 3; ++a) {
+              e[q][a] = m.nodes[t[q + 1] - 1][a] - p0[a];
+            }
+          }
+          if (det3(e[0], e[1], e[2]) < 0) {
+            std::swap(t[2], t[3]);
+          }
+          m.elements.push_back({4, group, t});
+        } while (std::next_permutation(order.begin(), order.end()));
+      }
+    }
+  }
+  if (!tets) {
+    for (std::size_t k = 0; k < n; ++k) {
+      for (std::size_t j = 0; j < n; ++j) {
+        m.elements.push_back(
+            {3, 2, {id(0, j, k), id(0, j, k + 1), id(0, j + 1, k + 1), id(0, j + 1, k)}});
+      }
+    }
+    m.names.emplace_back(2, 2, "left");
+  }
+  m.names.emplace_back(3, 1, "body");
+  m.names.emplace_back(3, 3, "front");
+  m.names.emplace_back(3, 4, "back");
+  return m;
+}
+
+/// The rectangle [0, a] × [0, b] cut into nx × ny quadrangles, or two triangles each; groups:
+/// 1 "plate" (2D), 2 "right" (the lines of the edge x = a).
+Msh plate_mesh(std::size_t nx, std::size_t ny, double a, double b, bool triangles) {
+  Msh m;
+  const auto id = [nx](std::size_t i, std::size_t j) { return 1 + i + (nx + 1) * j; };
+  for (std::size_t j = 0; j <= ny; ++j) {
+    for (std::size_t i = 0; i <= nx; ++i) {
+      m.nodes.push_back({a * static_cast<double>(i) / static_cast<double>(nx),
+                         b * static_cast<double>(j) / static_cast<double>(ny), 0});
+    }
+  }
+  for (std::size_t j = 0; j < ny; ++j) {
+    for (std::size_t i = 0; i < nx; ++i) {
+      if (triangles) {
+        m.elements.push_back({2, 1, {id(i, j), id(i + 1, j), id(i + 1, j + 1)}});
+        m.elements.push_back({2, 1, {id(i, j), id(i + 1, j + 1), id(i, j + 1)}});
+      } else {
+        m.elements.push_back({3, 1, {id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)}});
+      }
+    }
+  }
+  for (std::size_t j = 0; j < ny; ++j) {
+    m.elements.push_back({1, 2, {id(nx, j), id(nx, j + 1)}});
+  }
+  m.names = {{2, 1, "plate"}, {1, 2, "right"}};
+  return m;
+}
+
+double total(const std::vector<double>& v) {
+  return std::accumulate(v.begin(), v.end(), 0.0);
+}
+
+std::size_t count_of(const Msh& m, int type) {
+  return static_cast<std::size_t>(std::count_if(
+      m.elements.begin(), m.elements.end(), [type](const Element& e) { return e.type == type; }));
+}
+
+/// The message of the MeshFileError `read` raises, or "" if it succeeds.
+template <class F>
+std::string error_of(F read) {
+  try {
+    read();
+  } catch (const pd::MeshFileError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+bool contains(const std::string& text, const std::string& part) {
+  return text.find(part) != std::string::npos;
+}
+
+class MeshFile : public ::testing::Test {
+protected:
+  void SetUp() override {
+    if (!pd::mesh_files_supported()) {
+      GTEST_SKIP() << "libpd built without Gmsh";
+    }
+  }
+};
+
+TEST_F(MeshFile, HexahedraAndTetrahedraGiveOneParticlePerElementWithTheirVolume) {
+  const fs::path dir = temp_folder("solids");
+  for (const bool tets : {false, true}) {
+    const double size = 0.3;
+    const Msh m = box_mesh(3, size, tets);
+    const std::string path = write(dir / (tets ? "tets.msh" : "hexes.msh"), m.text());
+    const pd::MeshBody body = pd::read_mesh_file(path, 3, 1.0);
+    const std::size_t elements = count_of(m, tets ? 4 : 5);
+    EXPECT_EQ(elements, tets ? 162U : 27U);
+    ASSERT_EQ(body.cloud.count(), elements);
+    EXPECT_NEAR(total(body.cloud.volume), size * size * size, 1e-12 * size * size * size);
+    // Every particle inside the box, each cell's particles centred on it.
+    pd::Vec3 mean{0, 0, 0};
+    for (std::size_t i = 0; i < body.cloud.count(); ++i) {
+      for (std::size_t a = 0; a < 3; ++a) {
+        EXPECT_GT(body.cloud.position[i][a], 0);
+        EXPECT_LT(body.cloud.position[i][a], size);
+        mean[a] += body.cloud.position[i][a] * body.cloud.volume[i];
+      }
+    }
+    for (std::size_t a = 0; a < 3; ++a) {
+      EXPECT_NEAR(mean[a] / (size * size * size), size / 2, 1e-12 * size);
+    }
+    if (!tets) { // each hexahedron's particle at its cell's centre, with the cell's volume
+      const double h = size / 3;
+      for (std::size_t i = 0; i < body.cloud.count(); ++i) {
+        for (std::size_t a = 0; a < 3; ++a) {
+          const double cells = body.cloud.position[i][a] / h - 0.5;
+          EXPECT_NEAR(cells, std::round(cells), 1e-12);
+        }
+        EXPECT_NEAR(body.cloud.volume[i], h * h * h, 1e-12 * h * h * h);
+      }
+    }
+  }
+}
+
+TEST_F(MeshFile, TrianglesAndQuadranglesGiveAreaTimesThickness) {
+  const fs::path dir = temp_folder("plates");
+  const double a = 0.4, b = 0.1, thickness = 0.01;
+  for (const bool triangles : {false, true}) {
+    const Msh m = plate_mesh(8, 2, a, b, triangles);
+    const std::string path = write(dir / (triangles ? "tris.msh" : "quads.msh"), m.text());
+    const pd::MeshBody body = pd::read_mesh_file(path, 2, thickness);
+    ASSERT_EQ(body.cloud.count(), count_of(m, triangles ? 2 : 3));
+    EXPECT_EQ(body.cloud.count(), triangles ? 32U : 16U);
+    EXPECT_NEAR(total(body.cloud.volume), a * b * thickness, 1e-12 * a * b * thickness);
+  }
+  // The same plate wound the other way round (every element clockwise) is as good.
+  Msh flipped = plate_mesh(8, 2, a, b, true);
+  for (Element& e : flipped.elements) {
+    std::reverse(e.nodes.begin(), e.nodes.end());
+  }
+  const pd::MeshBody body = pd::read_mesh_file(write(dir / "cw.msh", flipped.text()), 2, thickness);
+  EXPECT_NEAR(total(body.cloud.volume), a * b * thickness, 1e-12 * a * b * thickness);
+}
+
+TEST_F(MeshFile, PhysicalGroupsNameTheirElementsParticles) {
+  const fs::path dir = temp_folder("groups");
+  const double size = 0.3;
+  const pd::MeshBody body =
+      pd::read_mesh_file(write(dir / "hexes.msh", box_mesh(3, size, false).text()), 3, 1.0);
+  // A face group: the particles of the elements on that face (x index 0: 9 of 27).
+  const auto& left = body.group("left");
+  ASSERT_EQ(left.size(), 9U);
+  for (const std::uint32_t p : left) {
+    EXPECT_NEAR(body.cloud.position[p][0], size / 6, 1e-15);
+  }
+  // Volume groups: their elements' particles, a layer of 9 each.
+  EXPECT_EQ(body.group("front"), left);
+  EXPECT_EQ(body.group("back").size(), 9U);
+  EXPECT_EQ(body.group("body").size(), 9U);
+  // 2D: an edge group.
+  const pd::MeshBody plate =
+      pd::read_mesh_file(write(dir / "tris.msh", plate_mesh(8, 2, 0.4, 0.1, true).text()), 2, 0.01);
+  const auto& right = plate.group("right");
+  ASSERT_EQ(right.size(), 2U); // of the two triangles per cell, one has the edge x = a
+  for (const std::uint32_t p : right) {
+    EXPECT_GT(plate.cloud.position[p][0], 0.4 - 0.05);
+  }
+  const std::string missing = error_of([&] { (void)plate.group("left"); });
+  EXPECT_TRUE(contains(missing, "tris.msh")) << missing;
+  EXPECT_TRUE(contains(missing, "'left'")) << missing;
+  EXPECT_TRUE(contains(missing, "'right'")) << missing; // the groups it has
+}
+
+TEST_F(MeshFile, BadMeshesAreRefusedNamingTheFileAndTheElement) {
+  const fs::path dir = temp_folder("bad");
+  EXPECT_EQ(error_of([&] { (void)pd::read_mesh_file((dir / "none.msh").string(), 3, 1.0); }),
+            (dir / "none.msh").string() + ": no such file");
+
+  Msh inverted = box_mesh(2, 1.0, true);
+  std::swap(inverted.elements[5].nodes[2], inverted.elements[5].nodes[3]);
+  const std::string inv = write(dir / "inverted.msh", inverted.text());
+  const std::string inverted_error = error_of([&] { (void)pd::read_mesh_file(inv, 3, 1.0); });
+  EXPECT_TRUE(contains(inverted_error, inv + ": element 6 ")) << inverted_error;
+  EXPECT_TRUE(contains(inverted_error, "inverted")) << inverted_error;
+
+  Msh flat = box_mesh(2, 1.0, true);
+  flat.nodes.push_back({0.5, 0.5, 0.0}); // four points of the plane z = 0
+  flat.elements.push_back({4, 1, {1, 2, 3, flat.nodes.size()}});
+  const std::string zero = write(dir / "zero.msh", flat.text());
+  const std::string zero_error = error_of([&] { (void)pd::read_mesh_file(zero, 3, 1.0); });
+  EXPECT_TRUE(contains(zero_error, zero + ": element 49 ")) << zero_error;
+  EXPECT_TRUE(contains(zero_error, "zero volume")) << zero_error;
+
+  // 2D: one triangle wound against all the others.
+  Msh turned = plate_mesh(4, 2, 1.0, 0.5, true);
+  std::reverse(turned.elements[3].nodes.begin(), turned.elements[3].nodes.end());
+  const std::string turn = write(dir / "turned.msh", turned.text());
+  const std::string turned_error = error_of([&] { (void)pd::read_mesh_file(turn, 2, 1.0); });
+  EXPECT_TRUE(contains(turned_error, turn + ": element 4 ")) << turned_error;
+  EXPECT_TRUE(contains(turned_error, "inverted")) << turned_error;
+
+  // The scene's dimension is not the mesh's.
+  const std::string hexes = write(dir / "hexes.msh", box_mesh(2, 1.0, false).text());
+  EXPECT_TRUE(contains(error_of([&] { (void)pd::read_mesh_file(hexes, 2, 1.0); }),
+                       hexes + ": is a 3D model, the scene is 2D"));
+
+  // An STL surface with a hole: a tetrahedron's surface less one facet.
+  const std::string stl = write(dir / "open.stl", "solid open\n"
+                                                  "facet normal 0 0 -1\nouter loop\n"
+                                                  "vertex 0 0 0\nvertex 0 1 0\nvertex 1 0 0\n"
+                                                  "endloop\nendfacet\n"
+                                                  "facet normal 0 -1 0\nouter loop\n"
+                                                  "vertex 0 0 0\nvertex 1 0 0\nvertex 0 0 1\n"
+                                                  "endloop\nendfacet\n"
+                                                  "facet normal -1 0 0\nouter loop\n"
+                                                  "vertex 0 0 0\nvertex 0 0 1\nvertex 0 1 0\n"
+                                                  "endloop\nendfacet\n"
+                                                  "endsolid open\n");
+  const std::string open_error = error_of([&] { (void)pd::mesh_geometry_file(stl, 3, 1.0, 0.2); });
+  EXPECT_TRUE(contains(open_error, stl + ": the surface is not closed")) << open_error;
+  EXPECT_TRUE(contains(open_error, "belongs to 1 triangle")) << open_error;
+}
+
+/// A 2D plate 0.1 × 0.05 with a hole of radius 0.01 at (0.05, 0.025), OpenCASCADE kernel.
+const char* plate_with_hole_geo = R"(SetFactory("OpenCASCADE");
+Rectangle(1) = {0, 0, 0, 0.1, 0.05};
+Disk(2) = {0.05, 0.025, 0, 0.01};
+BooleanDifference(3) = {Surface{1}; Delete;}{Surface{2}; Delete;};
+Physical Surface("plate") = {3};
+)";
+
+TEST_F(MeshFile, GeometryWithAHoleIsMeshedAtTheSpacing) {
+  const fs::path dir = temp_folder("geo");
+  const std::string geo = write(dir / "plate.geo", plate_with_hole_geo);
+  const double spacing = 0.0025, thickness = 0.01;
+  const pd::MeshBody body = pd::mesh_geometry_file(geo, 2, thickness, spacing);
+  // The hole's wall is a polygon inscribed in the circle: the area lies between the plate less
+  // the circle and the plate less the inscribed square.
+  const double r = 0.01;
+  const double area = total(body.cloud.volume) / thickness;
+  EXPECT_GT(area, 0.1 * 0.05 - M_PI * r * r);
+  EXPECT_LT(area, 0.1 * 0.05 - 2 * r * r);
+  // Elements no larger than the spacing: at least the area over that of a triangle of side λ.
+  EXPECT_GT(static_cast<double>(body.cloud.count()),
+            area / (std::sqrt(3.0) / 4 * spacing * spacing));
+  for (const pd::Vec3& p : body.cloud.position) {
+    EXPECT_GT(std::hypot(p[0] - 0.05, p[1] - 0.025), r); // no particle in the hole
+  }
+  EXPECT_EQ(body.group("plate").size(), body.cloud.count());
+  // Meshed twice, the same particles: one thread, the same mesh.
+  const pd::MeshBody again = pd::mesh_geometry_file(geo, 2, thickness, spacing);
+  EXPECT_EQ(again.cloud.position, body.cloud.position);
+  EXPECT_EQ(again.cloud.volume, body.cloud.volume);
+#ifdef LIBPD_TEST_GMSH
+  // The element count Gmsh itself makes of the file at that size.
+  gmsh::initialize(0, nullptr, false);
+  gmsh::option::setNumber("General.Terminal", 0);
+  gmsh::option::setNumber("General.NumThreads", 1);
+  gmsh::open(geo);
+  gmsh::option::setNumber("Mesh.MeshSizeMax", spacing);
+  gmsh::model::mesh::generate(2);
+  std::vector<int> types;
+  std::vector<std::vector<std::size_t>> tags, nodes;
+  gmsh::model::mesh::getElements(types, tags, nodes, 2);
+  std::size_t count = 0;
+  for (const auto& t : tags) {
+    count += t.size();
+  }
+  gmsh::finalize();
+  EXPECT_EQ(body.cloud.count(), count);
+#endif
+}
+
+std::string scene_text(const std::string& mesh, const std::string& model) {
+  return "dimension: 3\n"
+         "lattice:\n  spacing: 0.1\n" +
+         model +
+         "materials:\n  steel: {youngs_modulus: 200e9, poisson_ratio: 0.25, density: 7800}\n"
+         "bodies:\n  - {name: part, material: steel, mesh: " +
+         mesh +
+         "}\n"
+         "supports:\n  - {name: clamp, group: left, fixed: [x, y, z]}\n"
+         "loads:\n  - {name: push, group: back, value: [0, 0, -1000]}\n"
+         "solver: {integrator: static}\n"
+         "probes:\n  - {name: back_uz, group: back, component: z}\n";
+}
+
+TEST_F(MeshFile, PhysicalGroupsAreSceneRegionsAndMeshBodiesTakeLatticeFreeCorrections) {
+  const fs::path dir = temp_folder("scene");
+  write(dir / "hexes.msh", box_mesh(3, 0.3, false).text());
+  const std::string path = write(dir / "part.yaml", scene_text("hexes.msh", ""));
+  const pd::Scene scene = pd::load_scene(path);
+  EXPECT_EQ(scene.model.surface_correction, pd::mesh_surface_correction);
+  EXPECT_EQ(scene.model.volume_correction, pd::mesh_volume_correction);
+  const pd::Model model = pd::build_model(scene);
+  ASSERT_EQ(model.size(), 27U);
+  EXPECT_EQ(model.ghost_count, 0U);
+  std::set<std::uint32_t> held;
+  for (const pd::Constraint& c : model.constraints) {
+    held.insert(c.particle);
+    EXPECT_NEAR(model.particles.position[c.particle][0], 0.05, 1e-15);
+  }
+  EXPECT_EQ(held.size(), 9U);
+  EXPECT_EQ(model.constraints.size(), 27U);
+  double fz = 0;
+  std::size_t loaded = 0;
+  for (std::size_t i = 0; i < model.size(); ++i) {
+    const double f = model.external_force_density[3 * i + 2] * model.particles.volume[i];
+    fz += f;
+    loaded += f != 0 ? 1 : 0;
+    if (f != 0) {
+      EXPECT_NEAR(model.particles.position[i][0], 0.25, 1e-15);
+    }
+  }
+  EXPECT_EQ(loaded, 9U);
+  EXPECT_NEAR(fz, -1000, 1e-9);
+  EXPECT_FALSE(pd::mesh_corrections_note(scene.model).empty());
+
+  // Lattice-only corrections named on a mesh body, and groups the mesh lacks, are scene errors.
+  const auto scene_error = [](const std::string& file) {
+    try {
+      (void)pd::load_scene(file);
+    } catch (const pd::SceneError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  const std::string ghost = scene_error(
+      write(dir / "ghost.yaml", scene_text("hexes.msh", "model: {surface_correction: ghost}\n")));
+  EXPECT_TRUE(contains(ghost, "surface_correction 'ghost' needs a lattice")) << ghost;
+  const std::string gradient = scene_error(write(
+      dir / "gradient.yaml", scene_text("hexes.msh", "model: {volume_correction: gradient}\n")));
+  EXPECT_TRUE(contains(gradient, "volume_correction 'gradient' needs a lattice")) << gradient;
+  std::string text = scene_text("hexes.msh", "");
+  text.replace(text.find("group: left"), 11, "group: side");
+  const std::string missing = scene_error(write(dir / "missing.yaml", text));
+  EXPECT_TRUE(contains(missing, "no physical group 'side'")) << missing;
+  EXPECT_TRUE(contains(missing, "hexes.msh")) << missing;
+  const std::string no_file = scene_error(write(dir / "nofile.yaml", scene_text("gone.msh", "")));
+  EXPECT_TRUE(contains(no_file, "gone.msh: no such file")) << no_file;
+}
+
+} // namespace
