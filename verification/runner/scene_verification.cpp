@@ -178,6 +178,12 @@ Json verify_scene(const std::filesystem::path& scene_path, const Context& ctx,
     Json row;
     row["name"] = p.name;
     row["quantity"] = std::string(name_of(p.quantity));
+    if (!p.line.empty()) {
+      // A point of a line probe: the report plots the line's points as a profile.
+      row["line"] = p.line;
+      row["line_index"] = p.line_index;
+      row["line_distance"] = p.line_distance;
+    }
     if (value == pd.probes.end() || !row_fe) {
       row["note"] = "no FE value for this probe";
       complete = false;
