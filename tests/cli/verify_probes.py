@@ -2,7 +2,8 @@
 against a closed form (issue 37):
 
 * a quarter plate in uniaxial tension (symmetry planes x = 0 and y = 0, a traction σ on the far
-  edge, plane stress): von Mises = σ_xx = σ, σ_xy = 0, ε_xx = σ/E, ε_yy = −ν σ/E, ε_xy = 0, in
+  edge as a force on its last particle layer, whose end effect the probes are three half-heights
+  away from; plane stress): von Mises = σ_xx = σ, σ_xy = 0, ε_xx = σ/E, ε_yy = −ν σ/E, ε_xy = 0, in
   the bulk and at the free edge; a zero is judged against an absolute floor of σ (or σ/E);
 * a 2D cantilever clamped by a held layer, with a transverse load on its end layer: the clamp's
   reaction moment about a point equals the load's moment about it, F times the load's arm, and its
@@ -35,7 +36,7 @@ materials:
 bodies:
   - name: plate
     material: steel
-    box: [[0, 0], [0.1, 0.05]]
+    box: [[0, 0], [0.2, 0.05]]
 supports:
   - name: plane-x
     symmetry: {x: 0}
@@ -43,7 +44,7 @@ supports:
     symmetry: {y: 0}
 loads:
   - name: pull
-    box: [[0.0975, 0], [0.1, 0.05]]
+    box: [[0.1975, 0], [0.2, 0.05]]
     type: per_area
     value: [1e8, 0]
     measure: 0.0005
