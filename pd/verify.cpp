@@ -143,6 +143,11 @@ public:
     verdicts_[k] = verdict;
     results_[k] = std::move(result);
   }
+  /// How many cases have this verdict.
+  std::size_t count(const std::string& verdict) const {
+    const std::lock_guard lock(mutex_);
+    return static_cast<std::size_t>(std::count(verdicts_.begin(), verdicts_.end(), verdict));
+  }
   /// --junit FILE: the verdicts as JUnit XML too, written with summary.json.
   void junit_to(std::string file) { junit_ = std::move(file); }
 
@@ -152,15 +157,18 @@ public:
     Json j = Json::object();
     j["command"] = "verify";
     bool failed = false;
+    bool measured = false;
     Json cases = Json::array();
     for (std::size_t k = 0; k < names_.size(); ++k) {
       Json c = Json::object();
       c["name"] = names_[k];
       c["status"] = verdicts_[k].empty() ? "interrupted" : verdicts_[k];
-      failed = failed || verdicts_[k] == "failed";
+      failed = failed || verdicts_[k] == "failed" || verdicts_[k] == "error";
+      measured = measured || verdicts_[k] == "measured";
       cases.push_back(std::move(c));
     }
-    j["status"] = sig != 0 ? "interrupted" : failed ? "failed" : "passed";
+    // A run with a scene measured but not judged did not pass: it has no verdict to give.
+    j["status"] = sig != 0 ? "interrupted" : failed ? "failed" : measured ? "measured" : "passed";
     if (sig != 0) {
       j["stop_signal"] = sig;
     }
@@ -275,15 +283,18 @@ private:
 };
 
 /// The end of pd verify: the summary, the count and the exit status (2 if a gate failed, 5 if
-/// interrupted).
-int conclude(const Ledger& ledger, const InterruptGuard& interrupt, std::size_t cases, int failed) {
+/// interrupted). A scene measured without a tolerance is counted as measured, not as passed.
+int conclude(const Ledger& ledger, const InterruptGuard& interrupt, int failed) {
   ledger.write(interrupt.signal());
   if (interrupt.requested()) {
     fmt::print(stderr, "interrupted by signal {}: the cases not finished are not judged\n",
                interrupt.signal());
     return exit_interrupted;
   }
-  fmt::print("{} passed, {} failed\n", cases - static_cast<std::size_t>(failed), failed);
+  const std::size_t measured = ledger.count("measured");
+  fmt::print("{} passed, {}{} failed\n", ledger.count("passed"),
+             measured > 0 ? fmt::format("{} measured (no --gate), ", measured) : std::string(),
+             failed);
   return failed > 0 ? 2 : 0;
 }
 
@@ -337,7 +348,7 @@ int verify_scenes(const VerifyArgs& a, const verification::Context& ctx) {
     ledger.record(k, verdict, std::move(result));
     failed += verdict == "failed" ? 1 : 0;
   }
-  return conclude(ledger, interrupt, a.cases.size(), failed);
+  return conclude(ledger, interrupt, failed);
 }
 
 /// Run one case, write its JSON and say whether its gate passed; nothing if a stop request
@@ -429,7 +440,7 @@ int verify(const VerifyArgs& a) {
       failed += outcome->first ? 0 : 1;
     }
   }
-  return conclude(ledger, interrupt, selected.size(), failed);
+  return conclude(ledger, interrupt, failed);
 }
 
 } // namespace

@@ -198,7 +198,7 @@ std::vector<SceneProbe> translate_probes(const pd::Scene& scene, const pd::Parti
     if (spec.quantity == Q::damage)
       throw std::runtime_error("probe '" + spec.name +
                                "' reads damage; the FE reference is linear elastic");
-    if (spec.quantity != Q::reaction)
+    if (spec.quantity != Q::reaction && spec.quantity != Q::moment)
       located.push_back(spec);
   }
   pd::Model model;
@@ -211,15 +211,16 @@ std::vector<SceneProbe> translate_probes(const pd::Scene& scene, const pd::Parti
     SceneProbe p;
     p.name = spec.name;
     p.component = spec.component;
-    if (spec.quantity == Q::reaction) {
-      p.quantity = SceneProbe::Quantity::reaction;
+    p.quantity = spec.quantity;
+    if (spec.quantity == Q::reaction || spec.quantity == Q::moment) {
       p.support = support_index(scene, spec);
+      p.about = spec.about;
       out.push_back(std::move(p));
       continue;
     }
-    p.quantity = spec.quantity == Q::stress ? SceneProbe::Quantity::stress
-                                            : SceneProbe::Quantity::displacement;
-    for (const std::uint32_t i : resolved[next++].particles) {
+    const pd::ResolvedProbe& r = resolved[next++];
+    p.direction = r.direction;
+    for (const std::uint32_t i : r.particles) {
       const pd::Vec3& x = particles.position[i];
       if (!problem.in_domain(x, problem.tolerance()))
         throw std::runtime_error("probe '" + p.name +

@@ -42,11 +42,14 @@ struct SceneLoad {
 
 struct SceneProbe {
   std::string name;
-  // displacement or stress (σ_cc) averaged over the probe's particles; reaction of a support
-  enum class Quantity { displacement, reaction, stress } quantity = Quantity::displacement;
-  int component = 0;
-  std::vector<pd::Vec3> points; // displacement, stress: the particles PD averages over
-  std::size_t support = 0;      // reaction: index into SceneProblem::supports
+  // As PD reads it (pd::ProbeSpec): a mean over the probe's particles, a support's reaction or
+  // moment, an opening between two particles; damage has no FE value.
+  pd::ProbeSpec::Quantity quantity = pd::ProbeSpec::Quantity::displacement;
+  int component = 0;            // as pd::ProbeSpec::component
+  std::vector<pd::Vec3> points; // the particles PD reads (an opening: 'point', then 'to')
+  std::size_t support = 0;      // reaction, moment: index into SceneProblem::supports
+  pd::Vec3 about{0, 0, 0};      // moment
+  pd::Vec3 direction{0, 0, 0};  // opening: unit vector from 'point' to 'to'
 };
 
 // A solid of the scene's geometry as Gmsh builds it: a box or one of pd::Region's shapes.

@@ -25,6 +25,7 @@
 #include "scene_reference.h"
 
 #include "elastic_common.h"
+#include "libpd/app/probes.hpp"
 #include "libpd/core/memory.hpp"
 #include "libpd/discretisation/surface_load.hpp"
 #include "report.h"
@@ -60,18 +61,6 @@ pd::Vec3 to_vec3(const Point<dim>& p) {
   for (unsigned int d = 0; d < dim; ++d)
     v[d] = p[d];
   return v;
-}
-
-template <int dim>
-Point<dim> to_point(const pd::Vec3& v) {
-  Point<dim> p;
-  for (unsigned int d = 0; d < dim; ++d)
-    p[d] = v[d];
-  return p;
-}
-
-const char* component_name(const int c) {
-  return c == 0 ? "x" : c == 1 ? "y" : "z";
 }
 
 } // namespace
@@ -588,91 +577,6 @@ void SceneReference<dim>::solve() {
   levels.back().solver = solver_summary(stats);
 }
 
-// Why: the force a support exerts on the body is what equilibrium lacks without it: at its
-// dofs K u = f + R, so R = K u - f, summed over the dofs of the probe's component (in 2D times
-// the thickness: the FE problem is per unit thickness, PD's forces are in N).
-template <int dim>
-double SceneReference<dim>::reaction(const SceneProbe& probe) const {
-  const QGauss<dim> quadrature(fe.degree + 1);
-  FEValues<dim> fv(*mapping, fe, quadrature,
-                   update_values | update_gradients | update_quadrature_points | update_JxW_values);
-  std::set<types::global_dof_index> wanted;
-  for (const auto i : support_dofs.at(probe.support))
-    if (dof_component[i] == static_cast<unsigned int>(probe.component))
-      wanted.insert(i);
-  if (wanted.empty())
-    throw std::runtime_error("reaction probe '" + probe.name + "': support '" +
-                             problem.supports.at(probe.support).name + "' does not hold " +
-                             component_name(probe.component));
-  FullMatrix<double> cell_matrix;
-  Vector<double> cell_rhs;
-  const unsigned int n = fe.n_dofs_per_cell();
-  Vector<double> u(n), r(n);
-  std::vector<types::global_dof_index> dofs(n);
-  double sum = 0.;
-  for (const auto& cell : dof_handler->active_cell_iterators()) {
-    cell->get_dof_indices(dofs);
-    if (std::none_of(dofs.begin(), dofs.end(), [&](auto i) { return wanted.count(i) > 0; }))
-      continue;
-    cell_system(cell, fv, cell_matrix, cell_rhs);
-    cell->get_dof_values(solution, u);
-    cell_matrix.vmult(r, u);
-    for (unsigned int i = 0; i < n; ++i)
-      if (wanted.count(dofs[i]))
-        sum += r(i) - cell_rhs(i);
-  }
-  return dim == 2 ? sum * problem.dimension.thickness : sum;
-}
-
-template <int dim>
-void SceneReference<dim>::evaluate_probes() {
-  Functions::FEFieldFunction<dim> field(*dof_handler, solution, *mapping);
-  auto& values = levels.back().values;
-  for (const SceneProbe& probe : problem.probes) {
-    if (probe.quantity == SceneProbe::Quantity::reaction) {
-      values.push_back(reaction(probe));
-      continue;
-    }
-    std::vector<Point<dim>> points;
-    for (const pd::Vec3& x : probe.points)
-      points.push_back(to_point<dim>(x));
-    double sum = 0.;
-    if (probe.quantity == SceneProbe::Quantity::displacement) {
-      std::vector<Vector<double>> u(points.size(), Vector<double>(dim));
-      field.vector_value_list(points, u);
-      for (const auto& v : u)
-        sum += v[probe.component];
-    } else {
-      std::vector<std::vector<Tensor<1, dim>>> grad(points.size(),
-                                                    std::vector<Tensor<1, dim>>(dim));
-      field.vector_gradient_list(points, grad);
-      for (std::size_t k = 0; k < points.size(); ++k)
-        sum += normal_stress(probe.points[k], grad[k], probe.component);
-    }
-    values.push_back(sum / static_cast<double>(points.size()));
-  }
-}
-
-// Why: PD's stress probe reads σ_cc; here σ_cc = λ tr ε + 2μ ε_cc of the body's material at x
-// (plane stress: λ*; the out-of-plane σ_zz of a 2D model is λ tr ε in plane strain, 0 in plane
-// stress).
-template <int dim>
-double SceneReference<dim>::normal_stress(const pd::Vec3& x,
-                                          const std::vector<Tensor<1, dim>>& grad,
-                                          const int c) const {
-  const int body = problem.body_at(x);
-  const pd::Material& m = problem.materials.at(static_cast<std::size_t>(
-      problem.bodies.at(static_cast<std::size_t>(std::max(body, 0))).material));
-  const LameConstants lame = lame_constants(m.youngs_modulus * m.stiffness_factor, m.poisson_ratio,
-                                            problem.plane_stress());
-  double trace = 0.;
-  for (unsigned int d = 0; d < dim; ++d)
-    trace += grad[d][d];
-  if (c >= dim)
-    return problem.plane_stress() ? 0. : lame.lambda * trace;
-  return lame.lambda * trace + 2. * lame.mu * grad[c][c];
-}
-
 // Why: fe.json is what `pd verify` reads beside the PD run: per level the mesh and time, per
 // probe the values of every level, the best estimate (Richardson-extrapolated when the last
 // three levels are in the asymptotic range, else the finest value), its estimated error
@@ -719,10 +623,9 @@ void SceneReference<dim>::output_results(const double wall_time) const {
       const Richardson r = richardson(values, 2.);
       w.begin_object();
       w.value("name", probe.name);
-      w.value("quantity", probe.quantity == SceneProbe::Quantity::reaction ? "reaction"
-                          : probe.quantity == SceneProbe::Quantity::stress ? "stress"
-                                                                           : "displacement");
-      w.value("component", component_name(probe.component));
+      w.value("quantity", std::string(pd::name_of(probe.quantity)));
+      w.value("component", std::string(pd::probe_component_words[static_cast<std::size_t>(
+                               probe.component >= 3 ? probe.component + 3 : probe.component)]));
       w.begin_array("values");
       for (const double v : values)
         w.value("", v);

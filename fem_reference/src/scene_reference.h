@@ -73,7 +73,9 @@ private:
                    FEValues<dim>& fe_values, FullMatrix<double>& cell_matrix,
                    Vector<double>& cell_rhs) const;
   double reaction(const SceneProbe& probe) const;
-  double normal_stress(const pd::Vec3& x, const std::vector<Tensor<1, dim>>& grad, int c) const;
+  // The stress σ = λ tr ε I + 2 μ ε of the body's material at x, all 3×3 components.
+  std::array<std::array<double, 3>, 3> stress(const pd::Vec3& x,
+                                              const std::vector<Tensor<1, dim>>& grad) const;
   void pin_rigid_motion(std::map<types::global_dof_index, double>& value) const;
   void require_balanced_loads() const;
   void remove_rigid_motion();

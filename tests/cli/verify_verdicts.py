@@ -113,11 +113,16 @@ class VerifyVerdicts(pdcli.TestCase):
         self.assertAlmostEqual(d["materials"][0]["poisson_ratio"], 1 / 3, places=15)
         fe = load(self.path("verify", "scene", "fe", "fe.json"))
         self.assertEqual(fe["materials"][0]["poisson_ratio"], d["materials"][0]["poisson_ratio"])
+        # The summary line and summary.json count it as measured, not as passed.
+        self.assertIn("0 passed, 1 measured (no --gate), 0 failed", r.stdout)
+        self.assertEqual(load(self.path("verify", "summary.json"))["status"], "measured")
 
     def test_a_gate_judges_every_probe(self):
         r, d = self.verify(self.static_scene(), "--gate", "0.5")
         self.assertEqual(r.returncode, 0, r.stdout + r.stderr)
         self.assertEqual(d["verdict"], "passed")
+        self.assertIn("1 passed, 0 failed", r.stdout)
+        self.assertEqual(load(self.path("verify", "summary.json"))["status"], "passed")
         self.assertTrue(all(p["within_tolerance"] for p in d["probes"]))
         r, d = self.verify(self.static_scene(), "--gate", "1e-9")
         self.assertEqual(r.returncode, 2, r.stdout + r.stderr)
@@ -192,6 +197,24 @@ class VerifyVerdicts(pdcli.TestCase):
         self.assertEqual(r.returncode, 1, r.stdout + r.stderr)
         root = junit_schema.check(junit)
         self.assertEqual(int(root.get("errors")), 1)
+
+    def test_case_mode_junit_validates(self):
+        # A registered case (not a scene): one testsuite with one testcase, its gate.
+        junit = self.path("cases.xml")
+        out = self.path("cases")
+        r = self.pd("verify", "bond-count", "-o", out, "--junit", junit)
+        self.assertEqual(r.returncode, 0, r.stdout + r.stderr)
+        self.assertIn("1 passed, 0 failed", r.stdout)
+        root = junit_schema.check(junit)
+        suites = root.findall("testsuite")
+        self.assertEqual([s.get("name") for s in suites], ["bond-count"])
+        cases = suites[0].findall("testcase")
+        self.assertEqual(len(cases), 1)
+        self.assertEqual([x.tag for x in cases[0] if x.tag != "system-out"], [])
+        self.assertGreater(float(cases[0].get("time")), 0)
+        self.assertEqual((root.get("tests"), root.get("failures"), root.get("errors"),
+                          root.get("skipped")), ("1", "0", "0", "0"))
+        self.assertEqual(load(os.path.join(out, "summary.json"))["cases"][0]["status"], "passed")
 
     def test_a_crack_through_particle_centres_is_refused_where_it_is(self):
         # The tiny bar's particle rows are at y = 0.005, 0.015, 0.025 (spacing 0.01).

@@ -123,6 +123,20 @@ std::map<std::string, double> quantity_scales(const Scene& scene, const YAML::No
   return scale;
 }
 
+/// A probe's row in the scene's JSON: its name and quantity, and for a point of a line probe the
+/// line, its index and distance along it (the report plots the line's points as a profile).
+Json probe_row(const ProbeSpec& p) {
+  Json row;
+  row["name"] = p.name;
+  row["quantity"] = std::string(name_of(p.quantity));
+  if (!p.line.empty()) {
+    row["line"] = p.line;
+    row["line_index"] = p.line_index;
+    row["line_distance"] = p.line_distance;
+  }
+  return row;
+}
+
 } // namespace
 
 Json verify_scene(const std::filesystem::path& scene_path, const Context& ctx,
@@ -175,9 +189,7 @@ Json verify_scene(const std::filesystem::path& scene_path, const Context& ctx,
         row_fe = r;
       }
     }
-    Json row;
-    row["name"] = p.name;
-    row["quantity"] = std::string(name_of(p.quantity));
+    Json row = probe_row(p);
     if (value == pd.probes.end() || !row_fe) {
       row["note"] = "no FE value for this probe";
       complete = false;

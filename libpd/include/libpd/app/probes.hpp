@@ -5,21 +5,27 @@
 #include "libpd/io/scene.hpp"
 #include "libpd/time/simulation.hpp"
 
+#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
 
 namespace pd {
 
-/// A probe bound to particles: the mean of one quantity over them (a displacement component,
-/// the normal stress σ_cc, the damage index), or for a reaction the sum over the support's
-/// particles held in that component.
+/// A probe bound to particles: the mean of one quantity over them (a displacement, stress or
+/// strain component, the von Mises stress, the damage index), or a sum (probe_sums): a reaction
+/// or moment over the support's particles held, an opening over its two particles.
 struct ResolvedProbe {
   std::string name;
   int component = 0;
   std::vector<std::uint32_t> particles;
+  /// Beside `particles`: a moment's, the components each is held in (bit c); an opening's, 0
+  /// for the particle nearest 'point', 1 for the one nearest 'to'.
+  std::vector<std::uint8_t> role;
   ProbeSpec::Quantity quantity = ProbeSpec::Quantity::displacement;
-  std::vector<std::uint8_t> dependant; ///< stress: the model's massless dependants
+  std::vector<std::uint8_t> dependant; ///< stress, von Mises: the model's massless dependants
+  Vec3 about{0, 0, 0};                 ///< moment
+  Vec3 direction{0, 0, 0};             ///< opening: unit vector from 'point' to 'to'
   /// Particles the probe averages over, on all ranks together (particles.size() in one process).
   std::size_t count = 0;
 };
@@ -29,6 +35,15 @@ std::vector<ResolvedProbe> resolve_probes(const std::vector<ProbeSpec>& probes, 
 /// `local` owns (its part of a run split over ranks, discretisation/distribution.hpp).
 std::vector<ResolvedProbe> localise_probes(std::vector<ResolvedProbe> probes, const Model& local);
 double probe_value(const ResolvedProbe& probe, const Simulation& sim);
+
+/// A reaction, moment or opening is a sum over its particles; the rest are means.
+constexpr bool probe_sums(ProbeSpec::Quantity q) {
+  return q == ProbeSpec::Quantity::reaction || q == ProbeSpec::Quantity::moment ||
+         q == ProbeSpec::Quantity::opening;
+}
+
+/// The von Mises stress √(½ Σ (σ_aa − σ_bb)² + 3 Σ σ_ab²) of a symmetric stress.
+double von_mises(const std::array<std::array<double, 3>, 3>& stress);
 
 struct ProbeHistory {
   std::vector<double> time;

@@ -8,9 +8,11 @@
 #include "libpd/discretisation/model.hpp"
 #include "libpd/time/simulation.hpp"
 
+#include <array>
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace pd {
@@ -33,27 +35,59 @@ private:
   SourceMark mark_;
 };
 
+/// The components a probe can read, one word each: a displacement or reaction component (x, y,
+/// z), a moment's axis, or a tensor component of stress or strain (x, y, z read as xx, yy, zz).
+inline constexpr std::array<std::string_view, 9> probe_component_words{"x",  "y",  "z",  "xx", "yy",
+                                                                       "zz", "xy", "yz", "zx"};
+/// Tensor components 3, 4, 5 (xy, yz, zx) as index pairs; 0, 1, 2 are the diagonal.
+inline constexpr std::array<std::array<int, 2>, 6> tensor_component_axes{
+    {{0, 0}, {1, 1}, {2, 2}, {0, 1}, {1, 2}, {2, 0}}};
+
 struct ProbeSpec {
   std::string name;
-  /// Where: the particle nearest a point, the mean over a region, or a support's particles.
-  enum class Kind { point, region, support } kind = Kind::point;
-  /// What: a displacement component; the force a support exerts on the body; the normal stress
-  /// σ_cc from the bond forces; the damage index (eq. 13).
-  enum class Quantity { displacement, reaction, stress, damage } quantity = Quantity::displacement;
+  /// Where: the particle nearest a point, the mean over a region, or a support's particles
+  /// (`line` only while reading: a line becomes point probes).
+  enum class Kind { point, region, support, line } kind = Kind::point;
+  /// What: see EnumName<Quantity> below.
+  /// (New words go last: a checkpoint's fingerprint holds the number.)
+  enum class Quantity {
+    displacement,
+    reaction,
+    stress,
+    damage,
+    moment,
+    strain,
+    von_mises,
+    opening
+  } quantity = Quantity::displacement;
   Vec3 point{0, 0, 0};
+  Vec3 to{0, 0, 0};    ///< opening: the second point (the first is `point`)
+  Vec3 about{0, 0, 0}; ///< moment: the point the moment is taken about
   Region region;
   std::string support; ///< Kind::support: the support's name
-  int component = 0;   ///< 0, 1, 2 = x, y, z
+  /// A point of a line probe (`line: {from, to, points}`), which the reader writes as one point
+  /// probe per point, named LINE[k]: the line's name, k, and the distance from `from` [m].
+  std::string line;
+  int line_index = -1;
+  double line_distance = 0;
+  /// 0, 1, 2 = x, y, z (a stress or strain: xx, yy, zz); 3, 4, 5 = xy, yz, zx
+  int component = 0;
 };
 
 template <>
 struct EnumName<ProbeSpec::Quantity> {
   using Quantity = ProbeSpec::Quantity;
-  static constexpr NameTable<Quantity, 4> table{{
+  static constexpr NameTable<Quantity, 8> table{{
       {"displacement", Quantity::displacement, "displacement component [m]"},
       {"reaction", Quantity::reaction, "force the support exerts on the body [N]"},
-      {"stress", Quantity::stress, "normal stress σ_cc from the bond forces [Pa]"},
+      {"stress", Quantity::stress, "stress component σ_ab from the bond forces [Pa]"},
       {"damage", Quantity::damage, "damage index φ (eq. 13)"},
+      {"moment", Quantity::moment,
+       "moment about 'about' of the forces the support exerts on the body [N m]"},
+      {"strain", Quantity::strain, "small-strain component ε_ab of the displacement field [-]"},
+      {"von_mises", Quantity::von_mises, "von Mises stress of the bond-force stress [Pa]"},
+      {"opening", Quantity::opening,
+       "displacement of 'to' relative to 'point' along the line from 'point' to 'to' [m]"},
   }};
 };
 
