@@ -39,9 +39,11 @@ namespace pd {
 // Only particles whose neighbourhood fills their horizon get equations: a particle near a free
 // surface cannot have a zero 3rd moment with non-negative weights. Its bonds to fitted particles
 // are shaped by theirs; the rest stay at 1. The test is the volume centroid of the particle's
-// bonds: within 0.2 δ of it. A surface particle's is 3δ/8 away, that of a particle one spacing
+// bonds: within 0.1 δ of it. A surface particle's is 3δ/8 away, that of a particle one spacing
 // inside the surface about 0.07 δ at δ = 3λ; a jittered particle's own offset from its cell
-// centre moves it by as much (0.1 δ at ±0.3 λ, δ = 3λ), so a tighter test drops bulk particles.
+// centre moves it by up to 0.1 δ (±0.3 λ, δ = 3λ), so some bulk particles go unfitted. A wider
+// test (0.2 δ) took in particles near the surface whose equations cannot be met with
+// non-negative weights, and the solve failed.
 
 namespace {
 
@@ -114,7 +116,7 @@ System build_system(const CorrectionSpec& spec, const ParticleSet& particles,
       }
       volume += particles.volume[j];
     }
-    if (!(volume > 0) || norm(centroid) > 0.2 * delta * volume) {
+    if (!(volume > 0) || norm(centroid) > 0.1 * delta * volume) {
       continue;
     }
     const auto bonds = static_cast<Eigen::Index>(end - begin);

@@ -208,7 +208,7 @@ GradientWeights gradient_matched_weights(const CorrectionSpec& spec);
 /// Fitted bond weights (`volume_correction: fitted`), for particle sets that are not a lattice
 /// (jittered, varying volumes): one weight w_p ≥ 0 per pair, used at both ends so that momentum
 /// is balanced, such that every particle i whose neighbourhood fills its horizon (the volume
-/// centroid of its bonds within 0.2 δ of it) has
+/// centroid of its bonds within 0.1 δ of it) has
 ///  * the continuum's 4th moments, Σ_j w V_j |ξ| n⊗n⊗n⊗n = (U/3)(δδ + δδ + δδ) (U the uniaxial
 ///    moment), so its stress and energy density under any uniform strain are the continuum's, and
 ///  * no 3rd moment, Σ_j w V_j n⊗n⊗n = 0, so a uniform strain leaves it no force;
