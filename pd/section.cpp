@@ -48,6 +48,9 @@ std::vector<std::pair<SurfaceCorrection, VolumeCorrection>> correction_pairs(con
   if (all) {
     for (auto sc : all_surface_corrections) {
       for (auto vc : all_volume_corrections) {
+        if (vc == VolumeCorrection::fitted) {
+          continue; // weights for sets that are not a lattice: not a lattice table's row
+        }
         pairs.emplace_back(sc, vc);
       }
     }

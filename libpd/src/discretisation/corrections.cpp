@@ -369,6 +369,9 @@ std::vector<double> volume_correction_factors(const CorrectionSpec& spec,
     }
     return factor;
   }
+  if (spec.volume_correction == VolumeCorrection::fitted) {
+    return fitted_bond_weights(spec, particles, family).factor;
+  }
   if (spec.volume_correction == VolumeCorrection::moment) {
     const MomentWeights w = moment_matched_weights(spec);
     for (std::size_t i = 0; i < particles.size(); ++i) {

@@ -471,6 +471,8 @@ double fracture_energy_weight_ratio(const CorrectionSpec& spec) {
                            case VolumeCorrection::gradient:
                              w = gradient.weight(xi, lambda);
                              break;
+                           case VolumeCorrection::fitted:
+                             break; // fitted around 1, per particle: not a lattice's weights
                            }
                            const double term = xi[normal] * norm(xi);
                            weighted += w * term;

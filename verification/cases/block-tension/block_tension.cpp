@@ -208,6 +208,9 @@ Json run_block_tension_corrections(const Context& ctx) {
   Json combos = Json::array();
   for (std::size_t s = 0; s < surface_names.size(); ++s) {
     for (std::size_t v = 0; v < volume_names.size(); ++v) {
+      if (static_cast<VolumeCorrection>(v) == VolumeCorrection::fitted) {
+        continue; // weights for sets that are not a lattice
+      }
       Scene scene = variant(base, spacing, m0);
       scene.model.surface_correction = static_cast<SurfaceCorrection>(s);
       scene.model.volume_correction = static_cast<VolumeCorrection>(v);

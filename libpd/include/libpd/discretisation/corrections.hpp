@@ -24,8 +24,9 @@ namespace pd {
 enum class SurfaceCorrection { none, volume, energy, macek_silling, tensor, ghost };
 /// Quadrature weights of the bonds: partial-volume corrections of neighbour cells cut by the
 /// horizon (`linear`, `exact`), or lattice weights that reproduce the continuum's fourth moments
-/// (`moment`) and also its strain-gradient energy (`gradient`), see below.
-enum class VolumeCorrection { none, linear, exact, moment, gradient };
+/// (`moment`) and also its strain-gradient energy (`gradient`), see below; or, for sets that are
+/// not a lattice, weights fitted per pair to every particle's own neighbourhood (`fitted`).
+enum class VolumeCorrection { none, linear, exact, moment, gradient, fitted };
 
 template <>
 struct EnumName<SurfaceCorrection> {
@@ -43,13 +44,15 @@ struct EnumName<SurfaceCorrection> {
 
 template <>
 struct EnumName<VolumeCorrection> {
-  static constexpr NameTable<VolumeCorrection, 5> table{{
+  static constexpr NameTable<VolumeCorrection, 6> table{{
       {"none", VolumeCorrection::none, "full neighbour volumes"},
       {"linear", VolumeCorrection::linear, "partial volume of cut cells, linear in the distance"},
       {"exact", VolumeCorrection::exact, "partial volume of cut cells, exact"},
       {"moment", VolumeCorrection::moment, "moment-matched lattice weights"},
       {"gradient", VolumeCorrection::gradient,
        "lattice weights matching the 4th moments and the strain-gradient energy of a cell"},
+      {"fitted", VolumeCorrection::fitted,
+       "per-pair weights giving every particle's own neighbourhood the continuum's moments"},
   }};
 };
 
@@ -201,6 +204,25 @@ struct GradientWeights {
   double reach() const;
 };
 GradientWeights gradient_matched_weights(const CorrectionSpec& spec);
+
+/// Fitted bond weights (`volume_correction: fitted`), for particle sets that are not a lattice
+/// (jittered, varying volumes): one weight w_p ≥ 0 per pair, used at both ends so that momentum
+/// is balanced, such that every particle i whose neighbourhood fills its horizon (the volume
+/// centroid of its bonds within 0.1 δ of it) has
+///  * the continuum's 4th moments, Σ_j w V_j |ξ| n⊗n⊗n⊗n = (U/3)(δδ + δδ + δδ) (U the uniaxial
+///    moment), so its stress and energy density under any uniform strain are the continuum's, and
+///  * no 3rd moment, Σ_j w V_j n⊗n⊗n = 0, so a uniform strain leaves it no force;
+/// and among such weights those closest to 1 (least Σ_p (w_p − 1)², fitted_weights.cpp).
+struct FittedWeights {
+  std::vector<double> factor;   ///< per directed bond (CSR order), the same for both directions
+  std::size_t matched = 0;      ///< particles whose moments were fitted
+  double residual = 0;          ///< largest residual of their equations, relative to U
+  std::size_t zero_weights = 0; ///< pairs whose weight non-negativity held at 0
+  double smallest_positive = 0; ///< smallest non-zero weight
+  double largest = 0;           ///< largest weight
+};
+FittedWeights fitted_bond_weights(const CorrectionSpec& spec, const ParticleSet& particles,
+                                  const BondFamily& family);
 
 /// The longest bond that keeps a stiffness, in spacings: the outermost orbit with a non-zero
 /// weight under `gradient` weights (2 at δ = 2√3 λ), the horizon factor otherwise. Ghost sites
