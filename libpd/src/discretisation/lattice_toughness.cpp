@@ -103,7 +103,10 @@ ModelSpec boundary_layer_spec(const ModelSpec& user, double r_box) {
   m.youngs_modulus = 1;
   m.density = 1;
   spec.materials = {m};
-  spec.bodies = {BodySpec{"square", Region{{Box{{-r_box, -r_box, 0}, {r_box, r_box, 0}}}}, 0, {}}};
+  BodySpec square;
+  square.name = "square";
+  square.region = Region{{Box{{-r_box, -r_box, 0}, {r_box, r_box, 0}}}};
+  spec.bodies = {square};
   spec.cracks = {Crack{"tip", {{-r_box - 1, 0, 0}, {0, 0, 0}}}};
   return spec;
 }
