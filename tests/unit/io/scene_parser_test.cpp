@@ -207,8 +207,7 @@ lattice:
 }
 
 TEST(SceneParser, MissingBoxOfBody) {
-  EXPECT_TRUE(fails_at(
-      yaml(R"(
+  EXPECT_TRUE(fails_at(yaml(R"(
 dimension: 1
 lattice:
   spacing: 0.1
@@ -222,7 +221,10 @@ bodies:
 solver:
   end_time: 1
 )"),
-      9, 5, "missing 'box', 'boxes', 'cylinder', 'sphere', 'particles' or 'graded' in body 'bar'"));
+                       9, 5,
+                       "missing 'box', 'boxes', 'cylinder', 'sphere', 'particles', 'mesh', "
+                       "'geometry' or 'graded' in "
+                       "body 'bar'"));
 }
 
 TEST(SceneParser, BoxAndBoxesTogether) {
