@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <optional>
 #include <utility>
 
 #ifndef PD_SOURCE_SCENES_DIR
@@ -51,10 +52,34 @@ double relative_error(double value, double reference) {
   return std::abs(value - reference) / std::abs(reference);
 }
 
+bool within_gates(const Json& out, const std::vector<Gate>& gates) {
+  for (const Gate& g : gates) {
+    const bool floor = g.key.starts_with("min_");
+    const Json* group = out.find(floor ? "pd" : "error");
+    const Json* value = group ? group->find(floor ? g.key.substr(4) : g.key) : nullptr;
+    const std::optional<double> v = value ? value->number() : std::nullopt;
+    if (!v || !std::isfinite(*v) || !(floor ? *v >= g.limit : std::abs(*v) <= g.limit)) {
+      return false;
+    }
+  }
+  return true;
+}
+
 void finish_case(Json& out, const std::string& gate, bool passed,
                  std::chrono::steady_clock::time_point start) {
   out["gate"] = gate;
   out["passed"] = passed;
+  out["wall_seconds"] =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+void finish_case(Json& out, const std::vector<Gate>& gates, bool passed,
+                 std::chrono::steady_clock::time_point start) {
+  Json& object = out["gate"] = Json::object();
+  for (const Gate& g : gates) {
+    object[g.key] = g.limit;
+  }
+  out["passed"] = passed && within_gates(out, gates);
   out["wall_seconds"] =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }

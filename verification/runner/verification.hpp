@@ -80,8 +80,23 @@ double bar_modal_series(double x, double t, double strain, double length, double
 /// Relative error |a − b|/|b|.
 double relative_error(double value, double reference);
 
+/// A numeric gate of a case: `limit` bounds out["error"][key] (|error| ≤ limit), or, for a key
+/// "min_X", is a floor on out["pd"][X]. The report's scorecard draws a line per gate.
+struct Gate {
+  std::string key;
+  double limit = 0;
+};
+
+/// Whether every gate holds on the case's JSON; a gated value the case did not write fails.
+bool within_gates(const Json& out, const std::vector<Gate>& gates);
+
 /// The last keys of a case's JSON: its gate in words, the verdict and its wall time since `start`.
 void finish_case(Json& out, const std::string& gate, bool passed,
+                 std::chrono::steady_clock::time_point start);
+
+/// finish_case for numeric gates: `gate` becomes the object {key: limit}, and the case passes
+/// when `passed` (what the gates do not cover: the run completed, ...) and every gate holds.
+void finish_case(Json& out, const std::vector<Gate>& gates, bool passed,
                  std::chrono::steady_clock::time_point start);
 
 } // namespace pd::verification
