@@ -21,18 +21,28 @@ import pdcli
 
 E, NU, T = 200e9, 1 / 3, 0.01
 
-PLATE = """\
-title: "Quarter plate in uniaxial tension (plane stress)"
+
+def steel_scene(title, spacing, rest):
+    """A plane-stress steel scene (E, ν and thickness T above) at `spacing`, solved statically:
+    the part the three scenes share, then `rest` (bodies, supports, loads, probes)."""
+    return f"""\
+title: "{title}"
 dimension: 2
 plane: stress
-thickness: 0.01
+thickness: {T!r}
 lattice:
-  spacing: 0.0025
+  spacing: {spacing!r}
 materials:
   steel:
-    youngs_modulus: 200e9
-    poisson_ratio: 0.3333333333333333
+    youngs_modulus: {E!r}
+    poisson_ratio: {NU!r}
     density: 7800
+solver:
+  integrator: static
+""" + rest
+
+
+PLATE = steel_scene("Quarter plate in uniaxial tension (plane stress)", 0.0025, """\
 bodies:
   - name: plate
     material: steel
@@ -48,8 +58,6 @@ loads:
     type: per_area
     value: [1e8, 0]
     measure: 0.0005
-solver:
-  integrator: static
 probes:
   - {name: vm_bulk, box: [[0.04, 0.02], [0.06, 0.03]], quantity: von_mises}
   - {name: vm_edge, point: [0.05, 0.04875], quantity: von_mises}
@@ -61,21 +69,10 @@ probes:
   - {name: eyy_bulk, point: [0.05, 0.02375], quantity: strain, component: yy}
   - {name: eyy_edge, point: [0.05, 0.04875], quantity: strain, component: yy}
   - {name: exy_edge, point: [0.05, 0.04875], quantity: strain, component: xy}
-"""
+""")
 SIGMA = 1e8
 
-CANTILEVER = """\
-title: "2D cantilever, clamped layer, end load"
-dimension: 2
-plane: stress
-thickness: 0.01
-lattice:
-  spacing: 0.0025
-materials:
-  steel:
-    youngs_modulus: 200e9
-    poisson_ratio: 0.3333333333333333
-    density: 7800
+CANTILEVER = steel_scene("2D cantilever, clamped layer, end load", 0.0025, """\
 bodies:
   - name: beam
     material: steel
@@ -88,27 +85,14 @@ loads:
   - name: P
     box: [[0.3975, 0], [0.4, 0.05]]
     value: [0, -1000]
-solver:
-  integrator: static
 probes:
   - {name: moment, support: clamp, quantity: moment, about: [0, 0.025]}
   - {name: moment_far, support: clamp, quantity: moment, about: [0.2, 0.1]}
   - {name: shear_force, support: clamp, component: y}
-"""
+""")
 F, LOAD_X = 1000.0, 0.39875  # the load's particles (one layer) are at x = 0.4 − λ/2
 
-CRACK = """\
-title: "Centre crack in a plate pulled by grips (plane stress)"
-dimension: 2
-plane: stress
-thickness: 0.01
-lattice:
-  spacing: 0.002
-materials:
-  steel:
-    youngs_modulus: 200e9
-    poisson_ratio: 0.3333333333333333
-    density: 7800
+CRACK = steel_scene("Centre crack in a plate pulled by grips (plane stress)", 0.002, """\
 bodies:
   - name: plate
     material: steel
@@ -125,12 +109,10 @@ supports:
     box: [[0, 0.198], [0.2, 0.2]]
     displacement: {y: 1e-5}
     fixed: [x]
-solver:
-  integrator: static
 probes:
   - {name: cmod, point: [0.1, 0.099], to: [0.1, 0.101], quantity: opening}
   - {name: grip_force, support: top-grip, component: y}
-"""
+""")
 A_CRACK, WIDTH = 0.02, 0.2
 
 
