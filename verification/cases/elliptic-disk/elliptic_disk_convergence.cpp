@@ -22,8 +22,10 @@
 // order in spacing is twice the rate in particle count (2D).
 //
 // Gate: each run reaches its steady state, rms falls at every refinement and the observed order
-// is positive. Fig. 10 plots the RMS error against particle count for five densities up to
-// 39,200 particles but states no rate or value, so there is no number of the paper's to compare.
+// is at least `min_order`. Fig. 10 plots the RMS error against particle count for five densities
+// up to 39,200 particles but states no rate or value, so the order held to is the library's:
+// first order in spacing (docs/theory/elliptic-disk.md), less 0.2 for a least-squares slope over
+// four or five levels of Monte Carlo sets.
 //
 // `elliptic-disk` (label verification): a coarser zone grid, 10 × 20 zones, 3…6 particles per
 // zone side (1,800 … 7,200 particles). `elliptic-disk-convergence` (verification-full): the
@@ -59,6 +61,8 @@
 namespace pd::verification {
 
 namespace {
+
+constexpr double min_order = 0.8;
 
 struct DiskError {
   Json json;
@@ -207,15 +211,18 @@ Json run_densities(const Context& ctx, const std::string& name, const EllipticDi
   out["remote_stress"] = base.remote_stress;
   out["monte_carlo_sweeps"] = base.sweeps;
   Series gated = run_series(ctx, name, base, patterns);
-  const bool positive = gated.order.order && *gated.order.order > 0;
-  const bool passed = gated.converged && gated.falling && positive;
+  const bool ordered = gated.order.order && *gated.order.order >= min_order;
+  const bool passed = gated.converged && gated.falling && ordered;
   Json series = series_json(gated);
   out["runs"] = *series.find("runs");
   out["observed_order"] = *series.find("observed_order");
   out["rate_in_particle_count"] = *series.find("rate_in_particle_count");
+  out["pd"]["observed_order"] = gated.order.order ? Json(*gated.order.order) : Json{};
+  out["reference"]["min_observed_order"] = min_order;
   finish_case(out,
-              "every run at its steady state, the RMS error falling at every refinement and the "
-              "observed order positive",
+              fmt::format("every run at its steady state, the RMS error falling at every "
+                          "refinement and the observed order in spacing ≥ {:g}",
+                          min_order),
               passed, start);
   return out;
 }
