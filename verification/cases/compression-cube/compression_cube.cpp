@@ -14,7 +14,8 @@
 // 0.8 and 1.2 times it and the s0 that eq. 11 gives for the fib Model Code 2010 fracture energy
 // G_F = 73 f_cm^0.18. Bond-based PD with ν = 1/4 makes the compressive strength of a brittle
 // specimen a few times f_ct (lateral stretch ν ε), far below concrete's f_c/f_ct ≈ 15: see
-// docs/theory/quasi-brittle.md.
+// docs/theory/quasi-brittle.md. The gate is the concrete's: the peak stress within EC2's 8 MPa
+// between f_cm and f_ck; the model, with s0 from f_ctm, fails it by that margin of f_c/f_ct.
 #include "curve_recorder.hpp"
 #include "libpd/io/scene.hpp"
 #include "libpd/physics/material.hpp"
@@ -34,6 +35,9 @@ namespace {
 constexpr double paper_peak_stress = 72.9e6, paper_peak_strain = 0.0026;
 constexpr double ec2_peak_stress = 68.0e6, ec2_peak_strain = 0.0025; // f_cm, ε_c1 (C60/75)
 constexpr double ec2_tensile_strength = 4.4e6;                       // f_ctm (C60/75)
+// EN 1992-1-1 3.1.2: f_cm = f_ck + 8 MPa, f_ck the 5 % fractile of the cube's class; the gate holds
+// the peak to that band about f_cm, the scatter of the concrete EC2's values describe.
+constexpr double ec2_mean_over_characteristic = 8.0e6;
 constexpr double side = 0.15;
 
 double model_code_fracture_energy() {
@@ -326,9 +330,7 @@ Json run_compression_cube(const Context& ctx) {
     resolution.push_back(r.json);
   }
   out["resolution"] = resolution;
-  finish_case(out,
-              "reported: runs to the full closure with s0 = f_ctm/E and produces a peak followed "
-              "by a drop of >= 5 %; differences to the paper and EC2 are reported, not gated",
+  finish_case(out, {{"peak_stress_vs_ec2", ec2_mean_over_characteristic / ec2_peak_stress}},
               main.completed && s0_consistent && main.peak_stress > 0 && main.failed, start);
   return out;
 }
