@@ -14,8 +14,9 @@
 // 0.8 and 1.2 times it and the s0 that eq. 11 gives for the fib Model Code 2010 fracture energy
 // G_F = 73 f_cm^0.18. Bond-based PD with ν = 1/4 makes the compressive strength of a brittle
 // specimen a few times f_ct (lateral stretch ν ε), far below concrete's f_c/f_ct ≈ 15: see
-// docs/theory/quasi-brittle.md. The gate is the concrete's: the peak stress within EC2's 8 MPa
-// between f_cm and f_ck; the model, with s0 from f_ctm, fails it by that margin of f_c/f_ct.
+// docs/theory/quasi-brittle.md. The gate is the concrete's all the same (the peak stress within
+// EC2's 8 MPa of f_cm), so the case fails for as long as the model's strength in compression
+// falls short of concrete's.
 #include "curve_recorder.hpp"
 #include "libpd/io/scene.hpp"
 #include "libpd/physics/material.hpp"
