@@ -52,6 +52,9 @@ public:
     mean_strain_.assign(model.size(), 0.0);
     if (simd_) {
       mean_term_.assign(model.size(), 0.0);
+      record_.assign(4 * model.size(), 0.0);
+      length_.assign(f.directed_bond_count(), 0.0);
+      pack_rows_ = kernel::simd_fibre_pack_rows();
       mean_rows_ = kernel::simd_fibre_mean_rows();
       force_rows_ = kernel::simd_fibre_force_rows();
       path_ = "simd/" + kernel::simd_target_name();
@@ -62,9 +65,21 @@ public:
     if (simd_) {
       const FibreArms& a = model_.fibre_arms;
       const BondFamily& f = model_.family;
-      const kernel::FibreData d{f.offsets.data(),    f.neighbour.data(),  f.inverse_length.data(),
-                                mean_weight_.data(), a.own.data(),        a.other.data(),
-                                a.shear.data(),      a.volumetric.data(), mean_term_.data()};
+      kernel::FibreData d;
+      d.offsets = f.offsets.data();
+      d.neighbour = f.neighbour.data();
+      d.inverse_length = f.inverse_length.data();
+      d.mean_weight = mean_weight_.data();
+      d.own = a.own.data();
+      d.other = a.other.data();
+      d.shear = a.shear.data();
+      d.volumetric = a.volumetric.data();
+      d.record = record_.data();
+      d.length = length_.data();
+      d.mean_term = mean_term_.data();
+      kernel::for_row_ranges(d.offsets, model_.size(), [&](std::size_t first, std::size_t last) {
+        pack_rows_(d, y, b, first, last);
+      });
       kernel::for_row_ranges(d.offsets, model_.size(), [&](std::size_t first, std::size_t last) {
         mean_rows_(d, y, b, first, last);
       });
@@ -217,9 +232,12 @@ private:
 
   Model& model_;
   bool simd_;
-  std::vector<double> mean_weight_;       ///< A_k |ξ_k| / N per directed bond
-  std::vector<double> mean_strain_;       ///< ε̄ per particle, pass 1's result
-  std::vector<double> mean_term_;         ///< (NK − G(N+2)) ε̄ per particle, the SIMD pass 1's
+  std::vector<double> mean_weight_; ///< A_k |ξ_k| / N per directed bond
+  std::vector<double> mean_strain_; ///< ε̄ per particle, pass 1's result
+  std::vector<double> mean_term_;   ///< (NK − G(N+2)) ε̄ per particle, the SIMD pass 1's
+  std::vector<double> record_;      ///< the SIMD passes' (y, G(N+2)) per particle
+  std::vector<double> length_;      ///< |y_j − y_i| per directed bond, the SIMD pass 1's
+  kernel::FibreRows pack_rows_ = nullptr;
   kernel::FibreRows mean_rows_ = nullptr; ///< the SIMD passes, when simd_
   kernel::FibreRows force_rows_ = nullptr;
   std::string path_ = "scalar";

@@ -4,6 +4,10 @@
 // taken in `virtual_lanes` lanes reduced in lane order. The result depends on neither the thread
 // count nor the instruction set; it differs from the scalar kernel only in the order of the
 // per-particle sums. Elastic arms only: plasticity and damage run the scalar kernel.
+//
+// Pass 2 would otherwise pay what pass 1 has just paid (the same gathers, the same square roots)
+// plus two more gathers: pass 1 keeps each arm's length for it, and each particle's position and
+// shear constant sit together in one padded record (measured: pd-kernel-bench FibreVsBond).
 #pragma once
 
 #include <cstddef>
@@ -11,7 +15,7 @@
 
 namespace pd::kernel {
 
-/// Raw views of the arrays the two passes read and write.
+/// Raw views of the arrays the passes read and write.
 struct FibreData {
   const std::size_t* offsets = nullptr;
   const std::uint32_t* neighbour = nullptr;
@@ -21,16 +25,22 @@ struct FibreData {
   const double* other = nullptr;       ///< B_k per directed bond
   const double* shear = nullptr;       ///< G(N+2) per particle
   const double* volumetric = nullptr;  ///< NK − G(N+2) per particle
-  double* mean_term = nullptr;         ///< (NK − G(N+2)) ε̄ per particle: pass 1 writes it
+  /// (y_0, y_1, y_2, G(N+2)) per particle, written by the pack: a neighbour's position and shear
+  /// constant arrive in one 32-byte load instead of four scalar ones.
+  double* record = nullptr;
+  double* length = nullptr;    ///< |y_j − y_i| per directed bond: pass 1 writes it, pass 2 reads
+  double* mean_term = nullptr; ///< (NK − G(N+2)) ε̄ per particle: pass 1 writes it
 };
 
-/// Pass 1 (eq. 73: mean_term of particles [first, last); `b` is not used) or pass 2 (eqs. 70, 77:
-/// b of particles [first, last), reading every particle's mean_term). Threads may call either on
-/// disjoint ranges; pass 2 must wait for the whole of pass 1.
+/// The pack (`record` of particles [first, last) from y), pass 1 (eq. 73: mean_term and the arms'
+/// lengths of particles [first, last)) or pass 2 (eqs. 70, 77: b of particles [first, last),
+/// reading every particle's record and mean_term); `b` is used by pass 2 only. Threads may call
+/// each on disjoint ranges; each must wait for the whole of the one before.
 using FibreRows = void (*)(const FibreData& d, const double* y, double* b, std::size_t first,
                            std::size_t last);
 
 /// The two passes for the best instruction set of this CPU.
+FibreRows simd_fibre_pack_rows();
 FibreRows simd_fibre_mean_rows();
 FibreRows simd_fibre_force_rows();
 
