@@ -53,7 +53,6 @@ public:
     if (simd_) {
       mean_term_.assign(model.size(), 0.0);
       record_.assign(4 * model.size(), 0.0);
-      length_.assign(f.directed_bond_count(), 0.0);
       pack_rows_ = kernel::simd_fibre_pack_rows();
       mean_rows_ = kernel::simd_fibre_mean_rows();
       force_rows_ = kernel::simd_fibre_force_rows();
@@ -69,14 +68,13 @@ public:
       d.offsets = f.offsets.data();
       d.neighbour = f.neighbour.data();
       d.inverse_length = f.inverse_length.data();
-      d.mean_weight = mean_weight_.data();
       d.own = a.own.data();
       d.other = a.other.data();
       d.shear = a.shear.data();
       d.volumetric = a.volumetric.data();
       d.record = record_.data();
-      d.length = length_.data();
       d.mean_term = mean_term_.data();
+      d.dim = a.dim;
       kernel::for_row_ranges(d.offsets, model_.size(), [&](std::size_t first, std::size_t last) {
         pack_rows_(d, y, b, first, last);
       });

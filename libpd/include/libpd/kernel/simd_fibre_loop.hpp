@@ -5,9 +5,11 @@
 // count nor the instruction set; it differs from the scalar kernel only in the order of the
 // per-particle sums. Elastic arms only: plasticity and damage run the scalar kernel.
 //
-// Pass 2 would otherwise pay what pass 1 has just paid (the same gathers, the same square roots)
-// plus two more gathers: pass 1 keeps each arm's length for it, and each particle's position and
-// shear constant sit together in one padded record (measured: pd-kernel-bench FibreVsBond).
+// The passes are bound by data movement, not arithmetic (pd-kernel-bench FibreVsBond): each
+// particle's position and shear constant sit together in one padded record, so that a neighbour
+// arrives in one 32-byte load, and pass 1 computes its mean-strain weight (1/N) A_k |ξ_k| from A_k
+// and 1/|ξ_k|, which pass 2 reads anyway. Keeping the arm lengths of pass 1 for pass 2 was
+// measured slower than taking the square roots again: the extra stream cost more than the roots.
 #pragma once
 
 #include <cstddef>
@@ -20,20 +22,19 @@ struct FibreData {
   const std::size_t* offsets = nullptr;
   const std::uint32_t* neighbour = nullptr;
   const double* inverse_length = nullptr;
-  const double* mean_weight = nullptr; ///< (1/N) A_k |ξ_k| per directed bond
-  const double* own = nullptr;         ///< A_k per directed bond
-  const double* other = nullptr;       ///< B_k per directed bond
-  const double* shear = nullptr;       ///< G(N+2) per particle
-  const double* volumetric = nullptr;  ///< NK − G(N+2) per particle
+  const double* own = nullptr;        ///< A_k per directed bond
+  const double* other = nullptr;      ///< B_k per directed bond
+  const double* shear = nullptr;      ///< G(N+2) per particle
+  const double* volumetric = nullptr; ///< NK − G(N+2) per particle
   /// (y_0, y_1, y_2, G(N+2)) per particle, written by the pack: a neighbour's position and shear
   /// constant arrive in one 32-byte load instead of four scalar ones.
   double* record = nullptr;
-  double* length = nullptr;    ///< |y_j − y_i| per directed bond: pass 1 writes it, pass 2 reads
   double* mean_term = nullptr; ///< (NK − G(N+2)) ε̄ per particle: pass 1 writes it
+  double dim = 3;              ///< N
 };
 
-/// The pack (`record` of particles [first, last) from y), pass 1 (eq. 73: mean_term and the arms'
-/// lengths of particles [first, last)) or pass 2 (eqs. 70, 77: b of particles [first, last),
+/// The pack (`record` of particles [first, last) from y), pass 1 (eq. 73: mean_term of particles
+/// [first, last)) or pass 2 (eqs. 70, 77: b of particles [first, last),
 /// reading every particle's record and mean_term); `b` is used by pass 2 only. Threads may call
 /// each on disjoint ranges; each must wait for the whole of the one before.
 using FibreRows = void (*)(const FibreData& d, const double* y, double* b, std::size_t first,
