@@ -8,8 +8,9 @@
 //    (SIMD path); Dispatched/scalar_<effects>: the retained scalar kernel. fibres: the
 //    virtual-fibre model's kernel on the same lattice (its own family: compare per bond).
 //  * Target/<isa>: elastic exact on one instruction set (SSE4, AVX2, AVX3 = AVX-512).
-//  * FibreVsBond: the virtual-fibre kernel and the bond-based one (elastic, exact) on the same
-//    bonds (one fibre model's family), alternated within each iteration; the counters are the
+//  * FibreVsBond/<nx>: the virtual-fibre kernel and the bond-based one (elastic, exact) on the
+//    same bonds (one fibre model's family: Model A, or its cross-section nx cells long, whose arm
+//    arrays stay in cache), alternated within each iteration; the counters are the
 //    medians of each one's process CPU time and of their same-iteration ratio bond/fibre, the
 //    fibre kernel's per-bond rate relative to the bond-based one's (issue 41 asks ≥ 0.6).
 //  * Threshold/<nx>/<threads>: elastic exact on Model A's cross-section, nx cells long, on 1 or 2
@@ -228,7 +229,8 @@ double median(std::vector<double> v) {
 /// Both kernels on one fibre model's bond list, alternated so that both see the same load: a
 /// ratio taken within one iteration is what a busy, shared machine can still measure.
 void FibreVsBond(benchmark::State& state) {
-  pd::ModelSpec spec = model_a(pd::StretchKind::exact, false, false, false);
+  const auto nx = static_cast<double>(state.range(0));
+  pd::ModelSpec spec = model_a(pd::StretchKind::exact, false, false, false, 0.05 * (nx - 1));
   spec.effects.bond_model = pd::BondModel::virtual_fibres;
   pd::Model m = pd::build_model(spec);
   auto fibres = pd::make_force_evaluator(m);
@@ -286,7 +288,7 @@ BENCHMARK_CAPTURE(Dispatched, scalar_damage_exact, K::exact, true, false, false,
 BENCHMARK_CAPTURE(Target, SSE4, HWY_SSE4)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK_CAPTURE(Target, AVX2, HWY_AVX2)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK_CAPTURE(Target, AVX3, HWY_AVX3)->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK(FibreVsBond)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(FibreVsBond)->Arg(83)->Arg(12)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(Threshold)
     ->ArgsProduct({{4, 8, 12, 16, 24, 32, 48, 64, 83}, {1, 2}})
     ->Unit(benchmark::kMicrosecond)

@@ -68,13 +68,13 @@ public:
       d.offsets = f.offsets.data();
       d.neighbour = f.neighbour.data();
       d.inverse_length = f.inverse_length.data();
+      d.mean_weight = mean_weight_.data();
       d.own = a.own.data();
       d.other = a.other.data();
       d.shear = a.shear.data();
       d.volumetric = a.volumetric.data();
       d.record = record_.data();
       d.mean_term = mean_term_.data();
-      d.dim = a.dim;
       kernel::for_row_ranges(d.offsets, model_.size(), [&](std::size_t first, std::size_t last) {
         pack_rows_(d, y, b, first, last);
       });

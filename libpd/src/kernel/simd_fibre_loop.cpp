@@ -29,25 +29,25 @@ static_assert(kN * kU == virtual_lanes, "vector width must divide the virtual la
 struct Block {
   const std::int32_t* neighbour;
   const double* inverse_length;
-  const double* own;
-  const double* other; ///< pass 2 only
+  const double* weight; ///< pass 1: (1/N) A_k |ξ_k|; pass 2: A_k
+  const double* other;  ///< pass 2 only
 };
 
 struct Tail {
   alignas(64) std::int32_t neighbour[virtual_lanes];
   alignas(64) double inverse_length[virtual_lanes];
-  alignas(64) double own[virtual_lanes];
+  alignas(64) double weight[virtual_lanes];
   alignas(64) double other[virtual_lanes];
-  Block fill(const std::int32_t* nb, const FibreData& fd, std::size_t k, std::size_t n,
-             bool pass2) {
+  Block fill(const std::int32_t* nb, const FibreData& fd, const double* weight_row, std::size_t k,
+             std::size_t n, bool pass2) {
     for (std::size_t l = 0; l < virtual_lanes; ++l) {
       const std::size_t src = k + (l < n ? l : 0);
       neighbour[l] = nb[src];
       inverse_length[l] = fd.inverse_length[src];
-      own[l] = fd.own[src];
+      weight[l] = weight_row[src];
       other[l] = pass2 ? fd.other[src] : 0.0;
     }
-    return {neighbour, inverse_length, own, other};
+    return {neighbour, inverse_length, weight, other};
   }
 };
 
@@ -125,20 +125,15 @@ template <bool Full>
 HWY_INLINE void mean_block(const FibreData& fd, V yi0, V yi1, V yi2, const Block& p,
                            std::size_t valid, V (&acc)[kU]) {
   const D d;
-  const V one = hn::Set(d, 1.0), dim = hn::Set(d, fd.dim);
+  const V one = hn::Set(d, 1.0);
   for (std::size_t u = 0; u < kU; ++u) {
     const std::size_t o = u * kN;
     V yj0, yj1, yj2, unused;
     neighbours(d, fd.record, p.neighbour + o, yj0, yj1, yj2, unused);
     const V dy0 = hn::Sub(yj0, yi0), dy1 = hn::Sub(yj1, yi1), dy2 = hn::Sub(yj2, yi2);
     const V r = hn::Sqrt(hn::Add(hn::Add(hn::Mul(dy0, dy0), hn::Mul(dy1, dy1)), hn::Mul(dy2, dy2)));
-    const V inv = hn::LoadU(d, p.inverse_length + o);
-    const V strain = hn::Sub(hn::Mul(r, inv), one);
-    // (1/N) A_k |ξ_k| as the scalar kernel rounds it, computed here rather than read: one stream
-    // less, and pass 2 then reads nothing that pass 1 did not (measured faster on a busy machine,
-    // where the arm arrays do not stay in cache from one pass to the next).
-    const V weight = hn::Div(hn::LoadU(d, p.own + o), hn::Mul(inv, dim));
-    V term = hn::Mul(weight, strain);
+    const V strain = hn::Sub(hn::Mul(r, hn::LoadU(d, p.inverse_length + o)), one);
+    V term = hn::Mul(hn::LoadU(d, p.weight + o), strain);
     if constexpr (!Full) {
       term = hn::IfThenElseZero(hn::FirstN(d, valid > o ? valid - o : 0), term);
     }
@@ -160,12 +155,13 @@ void MeanRows(const FibreData& fd, const double* y, double* /*b*/, std::size_t f
     const std::size_t end = fd.offsets[i + 1];
     std::size_t k = fd.offsets[i];
     for (; k + virtual_lanes <= end; k += virtual_lanes) {
-      mean_block<true>(fd, yi0, yi1, yi2, Block{nb + k, fd.inverse_length + k, fd.own + k, nullptr},
+      mean_block<true>(fd, yi0, yi1, yi2,
+                       Block{nb + k, fd.inverse_length + k, fd.mean_weight + k, nullptr},
                        virtual_lanes, acc);
     }
     if (k < end) {
       Tail t;
-      const Block p = t.fill(nb, fd, k, end - k, false);
+      const Block p = t.fill(nb, fd, fd.mean_weight, k, end - k, false);
       mean_block<false>(fd, yi0, yi1, yi2, p, end - k, acc);
     }
     fd.mean_term[i] = fd.volumetric[i] * lane_sum(d, acc);
@@ -192,7 +188,8 @@ HWY_INLINE void force_block(const FibreData& fd, V yi0, V yi1, V yi2, V shear_i,
     const V s_i = hn::Add(hn::Mul(shear_i, strain), mean_i);
     const V s_j = hn::Add(hn::Mul(shear_j, strain), hn::Load(d, mean_j));
     V g = hn::Div(
-        hn::Add(hn::Mul(hn::LoadU(d, p.own + o), s_i), hn::Mul(hn::LoadU(d, p.other + o), s_j)), r);
+        hn::Add(hn::Mul(hn::LoadU(d, p.weight + o), s_i), hn::Mul(hn::LoadU(d, p.other + o), s_j)),
+        r);
     if constexpr (!Full) {
       g = hn::IfThenElseZero(hn::FirstN(d, valid > o ? valid - o : 0), g);
     }
@@ -225,7 +222,7 @@ void ForceRows(const FibreData& fd, const double* y, double* b, std::size_t firs
     }
     if (k < end) {
       Tail t;
-      const Block p = t.fill(nb, fd, k, end - k, true);
+      const Block p = t.fill(nb, fd, fd.own, k, end - k, true);
       force_block<false>(fd, yi0, yi1, yi2, shear_i, mean_i, p, end - k, acc);
     }
     for (std::size_t c = 0; c < 3; ++c) {

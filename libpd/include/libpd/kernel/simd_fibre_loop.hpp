@@ -5,11 +5,12 @@
 // count nor the instruction set; it differs from the scalar kernel only in the order of the
 // per-particle sums. Elastic arms only: plasticity and damage run the scalar kernel.
 //
-// The passes are bound by data movement, not arithmetic (pd-kernel-bench FibreVsBond): each
-// particle's position and shear constant sit together in one padded record, so that a neighbour
-// arrives in one 32-byte load, and pass 1 computes its mean-strain weight (1/N) A_k |ξ_k| from A_k
-// and 1/|ξ_k|, which pass 2 reads anyway. Keeping the arm lengths of pass 1 for pass 2 was
-// measured slower than taking the square roots again: the extra stream cost more than the roots.
+// The passes are bound by data movement more than by arithmetic (pd-kernel-bench FibreVsBond):
+// each particle's position and shear constant sit together in one padded record, so that a
+// neighbour arrives in one 32-byte load. Two things were measured and left out: keeping pass 1's
+// arm lengths for pass 2 (the extra stream cost more than the square roots it saved) and
+// computing pass 1's weight (1/N) A_k |ξ_k| from A_k instead of reading it (no faster: the
+// division it adds competes with the square roots).
 #pragma once
 
 #include <cstddef>
@@ -22,15 +23,15 @@ struct FibreData {
   const std::size_t* offsets = nullptr;
   const std::uint32_t* neighbour = nullptr;
   const double* inverse_length = nullptr;
-  const double* own = nullptr;        ///< A_k per directed bond
-  const double* other = nullptr;      ///< B_k per directed bond
-  const double* shear = nullptr;      ///< G(N+2) per particle
-  const double* volumetric = nullptr; ///< NK − G(N+2) per particle
+  const double* mean_weight = nullptr; ///< (1/N) A_k |ξ_k| per directed bond
+  const double* own = nullptr;         ///< A_k per directed bond
+  const double* other = nullptr;       ///< B_k per directed bond
+  const double* shear = nullptr;       ///< G(N+2) per particle
+  const double* volumetric = nullptr;  ///< NK − G(N+2) per particle
   /// (y_0, y_1, y_2, G(N+2)) per particle, written by the pack: a neighbour's position and shear
   /// constant arrive in one 32-byte load instead of four scalar ones.
   double* record = nullptr;
   double* mean_term = nullptr; ///< (NK − G(N+2)) ε̄ per particle: pass 1 writes it
-  double dim = 3;              ///< N
 };
 
 /// The pack (`record` of particles [first, last) from y), pass 1 (eq. 73: mean_term of particles
