@@ -27,8 +27,10 @@
 #include "libpd/kernel/simd_bond_loop.hpp"
 #include "libpd/kernel/simd_fibre_loop.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 #include <stdexcept>
 #include <vector>
@@ -53,9 +55,14 @@ public:
     if (simd_) {
       mean_term_.assign(model.size(), 0.0);
       record_.assign(4 * model.size(), 0.0);
+      state_.assign(4 * model.size(), 0.0);
       pack_rows_ = kernel::simd_fibre_pack_rows();
       mean_rows_ = kernel::simd_fibre_mean_rows();
-      force_rows_ = kernel::simd_fibre_force_rows();
+      // Compared bit for bit: the broadcast value must be each particle's own.
+      const bool uniform = std::all_of(a.shear.begin(), a.shear.end(), [&](double g) {
+        return std::memcmp(&g, a.shear.data(), sizeof g) == 0;
+      });
+      force_rows_ = kernel::simd_fibre_force_rows(uniform);
       path_ = "simd/" + kernel::simd_target_name();
     }
   }
@@ -74,6 +81,7 @@ public:
       d.shear = a.shear.data();
       d.volumetric = a.volumetric.data();
       d.record = record_.data();
+      d.state = state_.data();
       d.mean_term = mean_term_.data();
       kernel::for_row_ranges(d.offsets, model_.size(), [&](std::size_t first, std::size_t last) {
         pack_rows_(d, y, b, first, last);
@@ -233,7 +241,8 @@ private:
   std::vector<double> mean_weight_; ///< A_k |ξ_k| / N per directed bond
   std::vector<double> mean_strain_; ///< ε̄ per particle, pass 1's result
   std::vector<double> mean_term_;   ///< (NK − G(N+2)) ε̄ per particle, the SIMD pass 1's
-  std::vector<double> record_;      ///< the SIMD passes' (y, G(N+2)) per particle
+  std::vector<double> record_;      ///< (y, 0) per particle for the SIMD pass 1
+  std::vector<double> state_;       ///< (y, mean term) per particle for the SIMD pass 2
   std::vector<double> length_;      ///< |y_j − y_i| per directed bond, the SIMD pass 1's
   kernel::FibreRows pack_rows_ = nullptr;
   kernel::FibreRows mean_rows_ = nullptr; ///< the SIMD passes, when simd_

@@ -51,13 +51,13 @@ struct Tail {
   }
 };
 
-/// The records (y_0, y_1, y_2, G(N+2)) of kN neighbours, one lane each. With 4 or 8 lanes each
+/// The records (y_0, y_1, y_2, w) of kN neighbours, one lane each. With 4 or 8 lanes each
 /// record is one 32-byte load and the block is transposed in registers (through the stack, the
 /// vector loads would wait on the record stores: measured 1.8× slower on Zen 4); two lanes take
 /// scalar loads as the bond-based loop does. Only data moves here, so the lanes hold the same
 /// values on every instruction set.
 HWY_INLINE void neighbours(D d, const double* record, const std::int32_t* nb, V& yj0, V& yj1,
-                           V& yj2, V& shear_j) {
+                           V& yj2, V& w) {
   const auto at = [&](std::size_t l) { return record + 4 * static_cast<std::size_t>(nb[l]); };
 #if HWY_TARGET != HWY_SCALAR // which has no block operations
   if constexpr (kN == 4 || kN == 8) {
@@ -78,7 +78,7 @@ HWY_INLINE void neighbours(D d, const double* record, const std::int32_t* nb, V&
     yj0 = hn::OddEvenBlocks(hn::SwapAdjacentBlocks(even23), even01);
     yj2 = hn::OddEvenBlocks(even23, hn::SwapAdjacentBlocks(even01));
     yj1 = hn::OddEvenBlocks(hn::SwapAdjacentBlocks(odd23), odd01);
-    shear_j = hn::OddEvenBlocks(odd23, hn::SwapAdjacentBlocks(odd01));
+    w = hn::OddEvenBlocks(odd23, hn::SwapAdjacentBlocks(odd01));
     return;
   }
 #endif
@@ -92,7 +92,7 @@ HWY_INLINE void neighbours(D d, const double* record, const std::int32_t* nb, V&
     yj0 = hn::Load(d, lanes[0]);
     yj1 = hn::Load(d, lanes[1]);
     yj2 = hn::Load(d, lanes[2]);
-    shear_j = hn::Load(d, lanes[3]);
+    w = hn::Load(d, lanes[3]);
   }
 }
 
@@ -116,7 +116,7 @@ void PackRows(const FibreData& fd, const double* y, double* /*b*/, std::size_t f
     r[0] = y[3 * i];
     r[1] = y[3 * i + 1];
     r[2] = y[3 * i + 2];
-    r[3] = fd.shear[i];
+    r[3] = 0.0;
   }
 }
 
@@ -164,29 +164,40 @@ void MeanRows(const FibreData& fd, const double* y, double* /*b*/, std::size_t f
       const Block p = t.fill(nb, fd, fd.mean_weight, k, end - k, false);
       mean_block<false>(fd, yi0, yi1, yi2, p, end - k, acc);
     }
-    fd.mean_term[i] = fd.volumetric[i] * lane_sum(d, acc);
+    const double mean = fd.volumetric[i] * lane_sum(d, acc);
+    fd.mean_term[i] = mean;
+    double* r = fd.state + 4 * i;
+    r[0] = y[3 * i];
+    r[1] = y[3 * i + 1];
+    r[2] = y[3 * i + 2];
+    r[3] = mean;
   }
 }
 
 /// Pass 2 on one block: each arm's tension (eq. 70) times its direction into the lane sums.
-template <bool Full>
+/// `Uniform`: every particle has the shear constant `shear_all`, so none is gathered.
+template <bool Full, bool Uniform>
 HWY_INLINE void force_block(const FibreData& fd, V yi0, V yi1, V yi2, V shear_i, V mean_i,
-                            const Block& p, std::size_t valid, V (&acc)[3][kU]) {
+                            V shear_all, const Block& p, std::size_t valid, V (&acc)[3][kU]) {
   const D d;
   const V one = hn::Set(d, 1.0);
   for (std::size_t u = 0; u < kU; ++u) {
     const std::size_t o = u * kN;
-    V yj0, yj1, yj2, shear_j;
-    neighbours(d, fd.record, p.neighbour + o, yj0, yj1, yj2, shear_j);
+    V yj0, yj1, yj2, mean_j;
+    neighbours(d, fd.state, p.neighbour + o, yj0, yj1, yj2, mean_j);
     const V dy0 = hn::Sub(yj0, yi0), dy1 = hn::Sub(yj1, yi1), dy2 = hn::Sub(yj2, yi2);
-    alignas(64) double mean_j[kN];
-    for (std::size_t l = 0; l < kN; ++l) {
-      mean_j[l] = fd.mean_term[static_cast<std::size_t>(p.neighbour[o + l])];
+    V shear_j = shear_all;
+    if constexpr (!Uniform) {
+      alignas(64) double lanes[kN];
+      for (std::size_t l = 0; l < kN; ++l) {
+        lanes[l] = fd.shear[static_cast<std::size_t>(p.neighbour[o + l])];
+      }
+      shear_j = hn::Load(d, lanes);
     }
     const V r = hn::Sqrt(hn::Add(hn::Add(hn::Mul(dy0, dy0), hn::Mul(dy1, dy1)), hn::Mul(dy2, dy2)));
     const V strain = hn::Sub(hn::Mul(r, hn::LoadU(d, p.inverse_length + o)), one);
     const V s_i = hn::Add(hn::Mul(shear_i, strain), mean_i);
-    const V s_j = hn::Add(hn::Mul(shear_j, strain), hn::Load(d, mean_j));
+    const V s_j = hn::Add(hn::Mul(shear_j, strain), mean_j);
     V g = hn::Div(
         hn::Add(hn::Mul(hn::LoadU(d, p.weight + o), s_i), hn::Mul(hn::LoadU(d, p.other + o), s_j)),
         r);
@@ -199,10 +210,12 @@ HWY_INLINE void force_block(const FibreData& fd, V yi0, V yi1, V yi2, V shear_i,
   }
 }
 
+template <bool Uniform>
 void ForceRows(const FibreData& fd, const double* y, double* b, std::size_t first,
                std::size_t last) {
   const D d;
   const auto* nb = reinterpret_cast<const std::int32_t*>(fd.neighbour);
+  const V shear_all = hn::Set(d, Uniform ? fd.shear[0] : 0.0);
   for (std::size_t i = first; i < last; ++i) {
     const V yi0 = hn::Set(d, y[3 * i]), yi1 = hn::Set(d, y[3 * i + 1]),
             yi2 = hn::Set(d, y[3 * i + 2]);
@@ -216,14 +229,14 @@ void ForceRows(const FibreData& fd, const double* y, double* b, std::size_t firs
     const std::size_t end = fd.offsets[i + 1];
     std::size_t k = fd.offsets[i];
     for (; k + virtual_lanes <= end; k += virtual_lanes) {
-      force_block<true>(fd, yi0, yi1, yi2, shear_i, mean_i,
-                        Block{nb + k, fd.inverse_length + k, fd.own + k, fd.other + k},
-                        virtual_lanes, acc);
+      force_block<true, Uniform>(fd, yi0, yi1, yi2, shear_i, mean_i, shear_all,
+                                 Block{nb + k, fd.inverse_length + k, fd.own + k, fd.other + k},
+                                 virtual_lanes, acc);
     }
     if (k < end) {
       Tail t;
       const Block p = t.fill(nb, fd, fd.own, k, end - k, true);
-      force_block<false>(fd, yi0, yi1, yi2, shear_i, mean_i, p, end - k, acc);
+      force_block<false, Uniform>(fd, yi0, yi1, yi2, shear_i, mean_i, shear_all, p, end - k, acc);
     }
     for (std::size_t c = 0; c < 3; ++c) {
       b[3 * i + c] = lane_sum(d, acc[c]);
@@ -239,8 +252,8 @@ FibreRows FibrePackRowsFor() {
 FibreRows FibreMeanRowsFor() {
   return &fibre::MeanRows;
 }
-FibreRows FibreForceRowsFor() {
-  return &fibre::ForceRows;
+FibreRows FibreForceRowsFor(bool uniform_shear) {
+  return uniform_shear ? &fibre::ForceRows<true> : &fibre::ForceRows<false>;
 }
 
 } // namespace pd::kernel::HWY_NAMESPACE
@@ -261,8 +274,8 @@ FibreRows simd_fibre_mean_rows() {
   return HWY_DYNAMIC_DISPATCH(FibreMeanRowsFor)();
 }
 
-FibreRows simd_fibre_force_rows() {
-  return HWY_DYNAMIC_DISPATCH(FibreForceRowsFor)();
+FibreRows simd_fibre_force_rows(bool uniform_shear) {
+  return HWY_DYNAMIC_DISPATCH(FibreForceRowsFor)(uniform_shear);
 }
 
 } // namespace pd::kernel
