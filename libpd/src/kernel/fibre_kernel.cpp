@@ -59,9 +59,10 @@ public:
       pack_rows_ = kernel::simd_fibre_pack_rows();
       mean_rows_ = kernel::simd_fibre_mean_rows();
       // Compared bit for bit: the broadcast value must be each particle's own.
-      const bool uniform = std::all_of(a.shear.begin(), a.shear.end(), [&](double g) {
-        return std::memcmp(&g, a.shear.data(), sizeof g) == 0;
-      });
+      const bool uniform =
+          !a.shear.empty() && std::all_of(a.shear.begin(), a.shear.end(), [&](double g) {
+            return std::memcmp(&g, a.shear.data(), sizeof g) == 0;
+          });
       force_rows_ = kernel::simd_fibre_force_rows(uniform);
       path_ = "simd/" + kernel::simd_target_name();
     }
@@ -83,15 +84,11 @@ public:
       d.record = record_.data();
       d.state = state_.data();
       d.mean_term = mean_term_.data();
-      kernel::for_row_ranges(d.offsets, model_.size(), [&](std::size_t first, std::size_t last) {
-        pack_rows_(d, y, b, first, last);
-      });
-      kernel::for_row_ranges(d.offsets, model_.size(), [&](std::size_t first, std::size_t last) {
-        mean_rows_(d, y, b, first, last);
-      });
-      kernel::for_row_ranges(d.offsets, model_.size(), [&](std::size_t first, std::size_t last) {
-        force_rows_(d, y, b, first, last);
-      });
+      const auto rows = [&](kernel::FibreRows pass) {
+        return [&, pass](std::size_t first, std::size_t last) { pass(d, y, b, first, last); };
+      };
+      kernel::for_row_phases(d.offsets, model_.size(), rows(pack_rows_), rows(mean_rows_),
+                             rows(force_rows_));
       return;
     }
     const auto& start = model_.state.plastic_stretch_at_increment_start;
