@@ -53,9 +53,9 @@ struct Tail {
 
 /// The records (y_0, y_1, y_2, w) of kN neighbours, one lane each. With 4 or 8 lanes each
 /// record is one 32-byte load and the block is transposed in registers (through the stack, the
-/// vector loads would wait on the record stores: measured 1.8× slower on Zen 4); two lanes take
-/// scalar loads as the bond-based loop does. Only data moves here, so the lanes hold the same
-/// values on every instruction set.
+/// vector loads would wait on the record stores: measured 1.8× slower on Zen 4); narrower
+/// targets take scalar loads as the bond-based loop does. Only data moves here, so the lanes hold
+/// the same values on every instruction set.
 HWY_INLINE void neighbours(D d, const double* record, const std::int32_t* nb, V& yj0, V& yj1,
                            V& yj2, V& w) {
   const auto at = [&](std::size_t l) { return record + 4 * static_cast<std::size_t>(nb[l]); };
