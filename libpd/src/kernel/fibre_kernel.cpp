@@ -27,8 +27,10 @@
 #include "libpd/kernel/simd_bond_loop.hpp"
 #include "libpd/kernel/simd_fibre_loop.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 #include <stdexcept>
 #include <vector>
@@ -52,8 +54,16 @@ public:
     mean_strain_.assign(model.size(), 0.0);
     if (simd_) {
       mean_term_.assign(model.size(), 0.0);
+      record_.assign(4 * model.size(), 0.0);
+      state_.assign(4 * model.size(), 0.0);
+      pack_rows_ = kernel::simd_fibre_pack_rows();
       mean_rows_ = kernel::simd_fibre_mean_rows();
-      force_rows_ = kernel::simd_fibre_force_rows();
+      // Compared bit for bit: the broadcast value must be each particle's own.
+      const bool uniform =
+          !a.shear.empty() && std::all_of(a.shear.begin(), a.shear.end(), [&](double g) {
+            return std::memcmp(&g, a.shear.data(), sizeof g) == 0;
+          });
+      force_rows_ = kernel::simd_fibre_force_rows(uniform);
       path_ = "simd/" + kernel::simd_target_name();
     }
   }
@@ -62,15 +72,23 @@ public:
     if (simd_) {
       const FibreArms& a = model_.fibre_arms;
       const BondFamily& f = model_.family;
-      const kernel::FibreData d{f.offsets.data(),    f.neighbour.data(),  f.inverse_length.data(),
-                                mean_weight_.data(), a.own.data(),        a.other.data(),
-                                a.shear.data(),      a.volumetric.data(), mean_term_.data()};
-      kernel::for_row_ranges(d.offsets, model_.size(), [&](std::size_t first, std::size_t last) {
-        mean_rows_(d, y, b, first, last);
-      });
-      kernel::for_row_ranges(d.offsets, model_.size(), [&](std::size_t first, std::size_t last) {
-        force_rows_(d, y, b, first, last);
-      });
+      kernel::FibreData d;
+      d.offsets = f.offsets.data();
+      d.neighbour = f.neighbour.data();
+      d.inverse_length = f.inverse_length.data();
+      d.mean_weight = mean_weight_.data();
+      d.own = a.own.data();
+      d.other = a.other.data();
+      d.shear = a.shear.data();
+      d.volumetric = a.volumetric.data();
+      d.record = record_.data();
+      d.state = state_.data();
+      d.mean_term = mean_term_.data();
+      const auto rows = [&](kernel::FibreRows pass) {
+        return [&, pass](std::size_t first, std::size_t last) { pass(d, y, b, first, last); };
+      };
+      kernel::for_row_phases(d.offsets, model_.size(), rows(pack_rows_), rows(mean_rows_),
+                             rows(force_rows_));
       return;
     }
     const auto& start = model_.state.plastic_stretch_at_increment_start;
@@ -217,9 +235,13 @@ private:
 
   Model& model_;
   bool simd_;
-  std::vector<double> mean_weight_;       ///< A_k |ξ_k| / N per directed bond
-  std::vector<double> mean_strain_;       ///< ε̄ per particle, pass 1's result
-  std::vector<double> mean_term_;         ///< (NK − G(N+2)) ε̄ per particle, the SIMD pass 1's
+  std::vector<double> mean_weight_; ///< A_k |ξ_k| / N per directed bond
+  std::vector<double> mean_strain_; ///< ε̄ per particle, pass 1's result
+  std::vector<double> mean_term_;   ///< (NK − G(N+2)) ε̄ per particle, the SIMD pass 1's
+  std::vector<double> record_;      ///< (y, 0) per particle for the SIMD pass 1
+  std::vector<double> state_;       ///< (y, mean term) per particle for the SIMD pass 2
+  std::vector<double> length_;      ///< |y_j − y_i| per directed bond, the SIMD pass 1's
+  kernel::FibreRows pack_rows_ = nullptr;
   kernel::FibreRows mean_rows_ = nullptr; ///< the SIMD passes, when simd_
   kernel::FibreRows force_rows_ = nullptr;
   std::string path_ = "scalar";

@@ -29,7 +29,7 @@ static_assert(kN * kU == virtual_lanes, "vector width must divide the virtual la
 struct Block {
   const std::int32_t* neighbour;
   const double* inverse_length;
-  const double* weight; ///< pass 1: mean_weight; pass 2: own
+  const double* weight; ///< pass 1: (1/N) A_k |ξ_k|; pass 2: A_k
   const double* other;  ///< pass 2 only
 };
 
@@ -39,34 +39,61 @@ struct Tail {
   alignas(64) double weight[virtual_lanes];
   alignas(64) double other[virtual_lanes];
   Block fill(const std::int32_t* nb, const FibreData& fd, const double* weight_row, std::size_t k,
-             std::size_t n, bool with_other) {
+             std::size_t n, bool pass2) {
     for (std::size_t l = 0; l < virtual_lanes; ++l) {
       const std::size_t src = k + (l < n ? l : 0);
       neighbour[l] = nb[src];
       inverse_length[l] = fd.inverse_length[src];
       weight[l] = weight_row[src];
-      other[l] = with_other ? fd.other[src] : 0.0;
+      other[l] = pass2 ? fd.other[src] : 0.0;
     }
     return {neighbour, inverse_length, weight, other};
   }
 };
 
-/// y_j − y_i for kN arms, and the arm's length r = |y_j − y_i| (eq. 36's ε = r/|ξ| − 1 follows).
-/// Neighbour positions are gathered by scalar loads, as in the bond-based loop (measured faster
-/// than vgatherqpd on Zen 4).
-HWY_INLINE void arm(D d, const double* y, const std::int32_t* nb, V yi0, V yi1, V yi2, V& dy0,
-                    V& dy1, V& dy2, V& r) {
-  alignas(64) double yj0[kN], yj1[kN], yj2[kN];
-  for (std::size_t l = 0; l < kN; ++l) {
-    const double* yj = y + 3 * static_cast<std::size_t>(nb[l]);
-    yj0[l] = yj[0];
-    yj1[l] = yj[1];
-    yj2[l] = yj[2];
+/// The records (y_0, y_1, y_2, w) of kN neighbours, one lane each. With 4 or 8 lanes each
+/// record is one 32-byte load and the block is transposed in registers (through the stack, the
+/// vector loads would wait on the record stores: measured 1.8× slower on Zen 4); narrower
+/// targets take scalar loads as the bond-based loop does. Only data moves here, so the lanes hold
+/// the same values on every instruction set.
+HWY_INLINE void neighbours(D d, const double* record, const std::int32_t* nb, V& yj0, V& yj1,
+                           V& yj2, V& w) {
+  const auto at = [&](std::size_t l) { return record + 4 * static_cast<std::size_t>(nb[l]); };
+#if HWY_TARGET != HWY_SCALAR // which has no block operations
+  if constexpr (kN == 4 || kN == 8) {
+    // v[m] holds records m (lower half) and m + 4 (upper half, 8 lanes only); InterleaveLower/
+    // Upper pair them per 128-bit block, the block selects finish the transpose.
+    V v[4];
+    for (std::size_t m = 0; m < 4; ++m) {
+      if constexpr (kN == 4) {
+        v[m] = hn::LoadU(d, at(m));
+      } else {
+        const hn::Half<D> dh;
+        v[m] = hn::Combine(d, hn::LoadU(dh, at(m + 4)), hn::LoadU(dh, at(m)));
+      }
+    }
+    const V even01 = hn::InterleaveLower(d, v[0], v[1]),
+            even23 = hn::InterleaveLower(d, v[2], v[3]);
+    const V odd01 = hn::InterleaveUpper(d, v[0], v[1]), odd23 = hn::InterleaveUpper(d, v[2], v[3]);
+    yj0 = hn::OddEvenBlocks(hn::SwapAdjacentBlocks(even23), even01);
+    yj2 = hn::OddEvenBlocks(even23, hn::SwapAdjacentBlocks(even01));
+    yj1 = hn::OddEvenBlocks(hn::SwapAdjacentBlocks(odd23), odd01);
+    w = hn::OddEvenBlocks(odd23, hn::SwapAdjacentBlocks(odd01));
+    return;
   }
-  dy0 = hn::Sub(hn::Load(d, yj0), yi0);
-  dy1 = hn::Sub(hn::Load(d, yj1), yi1);
-  dy2 = hn::Sub(hn::Load(d, yj2), yi2);
-  r = hn::Sqrt(hn::Add(hn::Add(hn::Mul(dy0, dy0), hn::Mul(dy1, dy1)), hn::Mul(dy2, dy2)));
+#endif
+  {
+    alignas(64) double lanes[4][kN];
+    for (std::size_t l = 0; l < kN; ++l) {
+      for (std::size_t c = 0; c < 4; ++c) {
+        lanes[c][l] = at(l)[c];
+      }
+    }
+    yj0 = hn::Load(d, lanes[0]);
+    yj1 = hn::Load(d, lanes[1]);
+    yj2 = hn::Load(d, lanes[2]);
+    w = hn::Load(d, lanes[3]);
+  }
 }
 
 /// The lanes of `acc` added in virtual-lane order 0…7.
@@ -82,16 +109,29 @@ HWY_INLINE double lane_sum(D d, const V (&acc)[kU]) {
   return sum;
 }
 
+void PackRows(const FibreData& fd, const double* y, double* /*b*/, std::size_t first,
+              std::size_t last) {
+  for (std::size_t i = first; i < last; ++i) {
+    double* r = fd.record + 4 * i;
+    r[0] = y[3 * i];
+    r[1] = y[3 * i + 1];
+    r[2] = y[3 * i + 2];
+    r[3] = 0.0;
+  }
+}
+
 /// Pass 1 on one block: Σ (1/N) A_k |ξ_k| ε_k into the lane sums.
 template <bool Full>
-HWY_INLINE void mean_block(const double* y, V yi0, V yi1, V yi2, const Block& p, std::size_t valid,
-                           V (&acc)[kU]) {
+HWY_INLINE void mean_block(const FibreData& fd, V yi0, V yi1, V yi2, const Block& p,
+                           std::size_t valid, V (&acc)[kU]) {
   const D d;
   const V one = hn::Set(d, 1.0);
   for (std::size_t u = 0; u < kU; ++u) {
     const std::size_t o = u * kN;
-    V dy0, dy1, dy2, r;
-    arm(d, y, p.neighbour + o, yi0, yi1, yi2, dy0, dy1, dy2, r);
+    V yj0, yj1, yj2, unused;
+    neighbours(d, fd.record, p.neighbour + o, yj0, yj1, yj2, unused);
+    const V dy0 = hn::Sub(yj0, yi0), dy1 = hn::Sub(yj1, yi1), dy2 = hn::Sub(yj2, yi2);
+    const V r = hn::Sqrt(hn::Add(hn::Add(hn::Mul(dy0, dy0), hn::Mul(dy1, dy1)), hn::Mul(dy2, dy2)));
     const V strain = hn::Sub(hn::Mul(r, hn::LoadU(d, p.inverse_length + o)), one);
     V term = hn::Mul(hn::LoadU(d, p.weight + o), strain);
     if constexpr (!Full) {
@@ -115,38 +155,49 @@ void MeanRows(const FibreData& fd, const double* y, double* /*b*/, std::size_t f
     const std::size_t end = fd.offsets[i + 1];
     std::size_t k = fd.offsets[i];
     for (; k + virtual_lanes <= end; k += virtual_lanes) {
-      mean_block<true>(y, yi0, yi1, yi2,
+      mean_block<true>(fd, yi0, yi1, yi2,
                        Block{nb + k, fd.inverse_length + k, fd.mean_weight + k, nullptr},
                        virtual_lanes, acc);
     }
     if (k < end) {
       Tail t;
       const Block p = t.fill(nb, fd, fd.mean_weight, k, end - k, false);
-      mean_block<false>(y, yi0, yi1, yi2, p, end - k, acc);
+      mean_block<false>(fd, yi0, yi1, yi2, p, end - k, acc);
     }
-    fd.mean_term[i] = fd.volumetric[i] * lane_sum(d, acc);
+    const double mean = fd.volumetric[i] * lane_sum(d, acc);
+    fd.mean_term[i] = mean;
+    double* r = fd.state + 4 * i;
+    r[0] = y[3 * i];
+    r[1] = y[3 * i + 1];
+    r[2] = y[3 * i + 2];
+    r[3] = mean;
   }
 }
 
 /// Pass 2 on one block: each arm's tension (eq. 70) times its direction into the lane sums.
-template <bool Full>
-HWY_INLINE void force_block(const FibreData& fd, const double* y, V yi0, V yi1, V yi2, V shear_i,
-                            V mean_i, const Block& p, std::size_t valid, V (&acc)[3][kU]) {
+/// `Uniform`: every particle has the shear constant `shear_all`, so none is gathered.
+template <bool Full, bool Uniform>
+HWY_INLINE void force_block(const FibreData& fd, V yi0, V yi1, V yi2, V shear_i, V mean_i,
+                            V shear_all, const Block& p, std::size_t valid, V (&acc)[3][kU]) {
   const D d;
   const V one = hn::Set(d, 1.0);
   for (std::size_t u = 0; u < kU; ++u) {
     const std::size_t o = u * kN;
-    V dy0, dy1, dy2, r;
-    arm(d, y, p.neighbour + o, yi0, yi1, yi2, dy0, dy1, dy2, r);
-    alignas(64) double shear_j[kN], mean_j[kN];
-    for (std::size_t l = 0; l < kN; ++l) {
-      const auto j = static_cast<std::size_t>(p.neighbour[o + l]);
-      shear_j[l] = fd.shear[j];
-      mean_j[l] = fd.mean_term[j];
+    V yj0, yj1, yj2, mean_j;
+    neighbours(d, fd.state, p.neighbour + o, yj0, yj1, yj2, mean_j);
+    const V dy0 = hn::Sub(yj0, yi0), dy1 = hn::Sub(yj1, yi1), dy2 = hn::Sub(yj2, yi2);
+    V shear_j = shear_all;
+    if constexpr (!Uniform) {
+      alignas(64) double lanes[kN];
+      for (std::size_t l = 0; l < kN; ++l) {
+        lanes[l] = fd.shear[static_cast<std::size_t>(p.neighbour[o + l])];
+      }
+      shear_j = hn::Load(d, lanes);
     }
+    const V r = hn::Sqrt(hn::Add(hn::Add(hn::Mul(dy0, dy0), hn::Mul(dy1, dy1)), hn::Mul(dy2, dy2)));
     const V strain = hn::Sub(hn::Mul(r, hn::LoadU(d, p.inverse_length + o)), one);
     const V s_i = hn::Add(hn::Mul(shear_i, strain), mean_i);
-    const V s_j = hn::Add(hn::Mul(hn::Load(d, shear_j), strain), hn::Load(d, mean_j));
+    const V s_j = hn::Add(hn::Mul(shear_j, strain), mean_j);
     V g = hn::Div(
         hn::Add(hn::Mul(hn::LoadU(d, p.weight + o), s_i), hn::Mul(hn::LoadU(d, p.other + o), s_j)),
         r);
@@ -159,10 +210,12 @@ HWY_INLINE void force_block(const FibreData& fd, const double* y, V yi0, V yi1, 
   }
 }
 
+template <bool Uniform>
 void ForceRows(const FibreData& fd, const double* y, double* b, std::size_t first,
                std::size_t last) {
   const D d;
   const auto* nb = reinterpret_cast<const std::int32_t*>(fd.neighbour);
+  const V shear_all = hn::Set(d, Uniform ? fd.shear[0] : 0.0);
   for (std::size_t i = first; i < last; ++i) {
     const V yi0 = hn::Set(d, y[3 * i]), yi1 = hn::Set(d, y[3 * i + 1]),
             yi2 = hn::Set(d, y[3 * i + 2]);
@@ -176,14 +229,14 @@ void ForceRows(const FibreData& fd, const double* y, double* b, std::size_t firs
     const std::size_t end = fd.offsets[i + 1];
     std::size_t k = fd.offsets[i];
     for (; k + virtual_lanes <= end; k += virtual_lanes) {
-      force_block<true>(fd, y, yi0, yi1, yi2, shear_i, mean_i,
-                        Block{nb + k, fd.inverse_length + k, fd.own + k, fd.other + k},
-                        virtual_lanes, acc);
+      force_block<true, Uniform>(fd, yi0, yi1, yi2, shear_i, mean_i, shear_all,
+                                 Block{nb + k, fd.inverse_length + k, fd.own + k, fd.other + k},
+                                 virtual_lanes, acc);
     }
     if (k < end) {
       Tail t;
       const Block p = t.fill(nb, fd, fd.own, k, end - k, true);
-      force_block<false>(fd, y, yi0, yi1, yi2, shear_i, mean_i, p, end - k, acc);
+      force_block<false, Uniform>(fd, yi0, yi1, yi2, shear_i, mean_i, shear_all, p, end - k, acc);
     }
     for (std::size_t c = 0; c < 3; ++c) {
       b[3 * i + c] = lane_sum(d, acc[c]);
@@ -193,11 +246,14 @@ void ForceRows(const FibreData& fd, const double* y, double* b, std::size_t firs
 
 } // namespace fibre
 
+FibreRows FibrePackRowsFor() {
+  return &fibre::PackRows;
+}
 FibreRows FibreMeanRowsFor() {
   return &fibre::MeanRows;
 }
-FibreRows FibreForceRowsFor() {
-  return &fibre::ForceRows;
+FibreRows FibreForceRowsFor(bool uniform_shear) {
+  return uniform_shear ? &fibre::ForceRows<true> : &fibre::ForceRows<false>;
 }
 
 } // namespace pd::kernel::HWY_NAMESPACE
@@ -206,15 +262,20 @@ HWY_AFTER_NAMESPACE();
 #if HWY_ONCE
 namespace pd::kernel {
 
+HWY_EXPORT(FibrePackRowsFor);
 HWY_EXPORT(FibreMeanRowsFor);
 HWY_EXPORT(FibreForceRowsFor);
+
+FibreRows simd_fibre_pack_rows() {
+  return HWY_DYNAMIC_DISPATCH(FibrePackRowsFor)();
+}
 
 FibreRows simd_fibre_mean_rows() {
   return HWY_DYNAMIC_DISPATCH(FibreMeanRowsFor)();
 }
 
-FibreRows simd_fibre_force_rows() {
-  return HWY_DYNAMIC_DISPATCH(FibreForceRowsFor)();
+FibreRows simd_fibre_force_rows(bool uniform_shear) {
+  return HWY_DYNAMIC_DISPATCH(FibreForceRowsFor)(uniform_shear);
 }
 
 } // namespace pd::kernel

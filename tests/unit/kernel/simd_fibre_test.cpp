@@ -182,4 +182,44 @@ TEST(SimdFibre, BitwiseIdenticalOnEveryInstructionSet) {
   std::printf("instruction sets compared: %zu\n", targets.size());
 }
 
+/// One material: every particle has the same shear constant, and pass 2 takes it as a constant
+/// instead of gathering it (simd_fibre_loop.hpp) — the same forces on every instruction set and
+/// thread count, within the scalar kernel's summation-order bound.
+TEST(SimdFibre, OneMaterialIsBitwiseIdenticalOnEveryInstructionSetAndThreadCount) {
+  pd::ModelSpec spec = fibre_block(8);
+  spec.materials.resize(1);
+  for (auto& body : spec.bodies) {
+    body.material = 0;
+  }
+  std::vector<std::int64_t> targets;
+  for (std::int64_t bits = hwy::SupportedTargets() & HWY_TARGETS; bits != 0; bits &= bits - 1) {
+    targets.push_back(bits & -bits);
+  }
+  ASSERT_FALSE(targets.empty());
+  std::vector<Trace> traces;
+  for (std::int64_t target : targets) {
+    hwy::SetSupportedTargetsForTest(target);
+    traces.push_back(run(spec, KernelPath::simd));
+  }
+  hwy::SetSupportedTargetsForTest(0);
+  for (std::size_t t = 1; t < traces.size(); ++t) {
+    SCOPED_TRACE(hwy::TargetName(targets[t]));
+    EXPECT_TRUE(bitwise_equal(traces[t].forces, traces[0].forces));
+  }
+#ifdef _OPENMP
+  const int saved = omp_get_max_threads();
+  omp_set_num_threads(saved == 1 ? 2 : 1);
+  const Trace other_threads = run(spec, KernelPath::simd);
+  omp_set_num_threads(saved);
+  EXPECT_TRUE(bitwise_equal(other_threads.forces, traces.back().forces));
+#endif
+  const Trace scalar = run(spec, KernelPath::scalar);
+  double worst = 0, largest = 0;
+  for (std::size_t at = 0; at < scalar.forces.size(); ++at) {
+    worst = std::max(worst, std::abs(scalar.forces[at] - traces[0].forces[at]));
+    largest = std::max(largest, std::abs(scalar.forces[at]));
+  }
+  EXPECT_LE(worst, 1e-12 * largest) << "the SIMD and scalar kernels differ beyond summation order";
+}
+
 } // namespace

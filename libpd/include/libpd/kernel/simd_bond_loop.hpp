@@ -48,12 +48,13 @@ std::string simd_target_name();
 /// `--threads 1` on a busy machine, not for a higher threshold.
 inline constexpr std::size_t simd_parallel_min_bonds = 32768;
 
-/// Calls `rows(first, last)` once per thread of a parallel region (one thread below
-/// simd_parallel_min_bonds directed bonds) on contiguous particle ranges with equal bond counts
-/// (irregular sets balance too). A row kernel's result for a particle does not depend on which
-/// thread computes it, so neither does the whole.
-template <class Rows>
-void for_row_ranges(const std::size_t* offsets, std::size_t n, Rows&& rows) {
+/// Calls each of `phases(first, last)` in turn once per thread of one parallel region (one thread
+/// below simd_parallel_min_bonds directed bonds), with a barrier between phases, on contiguous
+/// particle ranges with equal bond counts (irregular sets balance too). A row kernel's result for
+/// a particle does not depend on which thread computes it, so neither does the whole. One region
+/// for several phases: on a busy machine each region's start and end costs more than a barrier.
+template <class... Phases>
+void for_row_phases(const std::size_t* offsets, std::size_t n, Phases&&... phases) {
   const std::size_t bonds = offsets[n];
 #pragma omp parallel if (bonds >= simd_parallel_min_bonds)
   {
@@ -71,8 +72,22 @@ void for_row_ranges(const std::size_t* offsets, std::size_t n, Rows&& rows) {
     first = split(t);
     last = split(t + 1);
 #endif
-    rows(first, last);
+    bool after_first = false;
+    const auto phase = [&](auto& rows) {
+      if (after_first) {
+#pragma omp barrier
+      }
+      after_first = true;
+      rows(first, last);
+    };
+    (phase(phases), ...);
   }
+}
+
+/// for_row_phases with one phase.
+template <class Rows>
+void for_row_ranges(const std::size_t* offsets, std::size_t n, Rows&& rows) {
+  for_row_phases(offsets, n, rows);
 }
 
 } // namespace pd::kernel
