@@ -170,6 +170,46 @@ TEST(SceneGeometry, CrackCutsTheBondsThatCrossIt) {
   EXPECT_EQ(with.family.bond_count() + with.bonds_cut_by_crack[0], without.family.bond_count());
 }
 
+// Issue 36: a bond that crosses the crack behind its front but ends beyond it is kept, as a crack
+// grown by breaking bonds leaves it; cutting it too made the pre-crack sharper than a grown crack
+// (its first bonds broke 4–13 % below the running crack's K) and its faces too compliant.
+TEST(SceneGeometry, CrackKeepsTheBondsThatReachPastItsFront) {
+  const pd::Scene s = pd::parse_scene(plate(R"(cracks:
+  - name: c
+    segment: [[0.05, 0.05], [0.15, 0.05]]
+)") + solver,
+                                      "s.yaml");
+  pd::ModelSpec spec = s.model;
+  spec.surface_correction = pd::SurfaceCorrection::none;
+  spec.volume_correction = pd::VolumeCorrection::none;
+  const pd::Model m = pd::build_model(spec);
+  const auto& x = m.particles.position;
+  const auto at = [&](double px, double py) {
+    for (std::size_t i = 0; i < m.body_particle_count(); ++i) {
+      if (std::abs(x[i][0] - px) < 1e-9 && std::abs(x[i][1] - py) < 1e-9) {
+        return i;
+      }
+    }
+    ADD_FAILURE() << "no particle at " << px << ", " << py;
+    return std::size_t{0};
+  };
+  const auto bonded = [&](std::size_t i, std::size_t j) {
+    for (std::size_t k = m.family.offsets[i]; k < m.family.offsets[i + 1]; ++k) {
+      if (m.family.neighbour[k] == j) {
+        return true;
+      }
+    }
+    return false;
+  };
+  // Crosses y = 0.05 at x = 0.145, behind the front at 0.15, and ends at x = 0.155 beyond it.
+  EXPECT_TRUE(bonded(at(0.135, 0.045), at(0.155, 0.055)));
+  EXPECT_TRUE(bonded(at(0.155, 0.055), at(0.135, 0.045)));
+  // Crosses at x = 0.135 with both ends over the crack: cut.
+  EXPECT_FALSE(bonded(at(0.125, 0.045), at(0.145, 0.055)));
+  // The straight bond across the front's last cell: both ends at x = 0.145, cut.
+  EXPECT_FALSE(bonded(at(0.145, 0.045), at(0.145, 0.055)));
+}
+
 // Issue 38, item 11: a crack outside every body was accepted without a word (it cuts nothing).
 TEST(SceneGeometry, CrackOutsideEveryBodyIsAWarning) {
   const pd::Scene inside = pd::parse_scene(plate(R"(cracks:

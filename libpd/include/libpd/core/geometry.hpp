@@ -176,7 +176,8 @@ struct Region {
 };
 
 /// A pre-crack: a segment (2D, two vertices) or a planar polygon (3D, three or more vertices in
-/// order). Bonds that cross it are never created.
+/// order). Bonds that cross it with both ends over it are never created (bond_cuts.cpp says why a
+/// bond reaching past its front is kept).
 struct Crack {
   std::string name;
   std::vector<Vec3> vertices;
@@ -185,6 +186,19 @@ struct Crack {
   /// plane does not cross it).
   bool cuts(const Vec3& a, const Vec3& b, int dim) const {
     return dim == 2 ? cuts_2d(a, b) : cuts_3d(a, b);
+  }
+  /// Whether p lies over the crack: its projection onto the crack's line (2D) or plane (3D) falls
+  /// inside the segment or polygon (its edge included).
+  bool covers(const Vec3& p, int dim) const {
+    if (dim == 2) {
+      const Vec3& c = vertices[0];
+      const Vec3& d = vertices[1];
+      const double along = (p[0] - c[0]) * (d[0] - c[0]) + (p[1] - c[1]) * (d[1] - c[1]);
+      return along >= 0 && along <= (d[0] - c[0]) * (d[0] - c[0]) + (d[1] - c[1]) * (d[1] - c[1]);
+    }
+    const Vec3 n = normal();
+    const double h = dot(n, sub(p, vertices[0])) / dot(n, n);
+    return inside_polygon({p[0] - h * n[0], p[1] - h * n[1], p[2] - h * n[2]}, n);
   }
   bool operator==(const Crack&) const = default;
 
@@ -201,22 +215,26 @@ private:
     const double d4 = cross2(a, b, d);
     return d1 * d2 <= 0 && d3 * d4 <= 0 && !(d1 == 0 && d2 == 0);
   }
+  static Vec3 sub(const Vec3& p, const Vec3& q) { return {p[0] - q[0], p[1] - q[1], p[2] - q[2]}; }
+  Vec3 normal() const {
+    const Vec3 p = sub(vertices[1], vertices[0]);
+    const Vec3 q = sub(vertices[2], vertices[0]);
+    return {p[1] * q[2] - p[2] * q[1], p[2] * q[0] - p[0] * q[2], p[0] * q[1] - p[1] * q[0]};
+  }
   bool cuts_3d(const Vec3& a, const Vec3& b) const {
-    const auto sub = [](const Vec3& p, const Vec3& q) {
-      return Vec3{p[0] - q[0], p[1] - q[1], p[2] - q[2]};
-    };
-    const auto cross = [](const Vec3& p, const Vec3& q) {
-      return Vec3{p[1] * q[2] - p[2] * q[1], p[2] * q[0] - p[0] * q[2], p[0] * q[1] - p[1] * q[0]};
-    };
-    const Vec3 n = cross(sub(vertices[1], vertices[0]), sub(vertices[2], vertices[0]));
+    const Vec3 n = normal();
     const double da = dot(n, sub(a, vertices[0]));
     const double db = dot(n, sub(b, vertices[0]));
     if (da * db > 0 || da == db) {
       return false; // both on one side, or the bond lies in the plane
     }
     const double t = da / (da - db);
-    const Vec3 x{a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]), a[2] + t * (b[2] - a[2])};
-    // Inside the (convex or not) polygon: the crossing number in the plane's dominant projection.
+    return inside_polygon(
+        {a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]), a[2] + t * (b[2] - a[2])}, n);
+  }
+  /// Whether x, projected along the normal n, falls inside the (convex or not) polygon: the
+  /// crossing number in the plane's dominant projection.
+  bool inside_polygon(const Vec3& x, const Vec3& n) const {
     std::size_t u = 0, v = 1;
     if (std::abs(n[0]) >= std::abs(n[1]) && std::abs(n[0]) >= std::abs(n[2])) {
       u = 1, v = 2;

@@ -70,7 +70,7 @@ constexpr Key root_keys[] = {
     {.name = "loads", .type = Type::list, .doc = "external forces", .section = &load_section},
     {.name = "cracks",
      .type = Type::list,
-     .doc = "pre-cracks: no bond crosses them",
+     .doc = "pre-cracks: no bond crosses them with both ends over them",
      .show = Show::commented,
      .section = &crack_section},
     {.name = "effects",
