@@ -714,6 +714,18 @@ void SceneReference<dim>::output_results(const double wall_time) const {
       for (const double v : values)
         w.value("", v);
       w.end_array();
+      // Where the FE read the probe (the particles libpd resolves for it), for a few points:
+      // on an unstructured set they are not where the scene's `point` says.
+      if (!probe.points.empty() && probe.points.size() <= 16) {
+        w.begin_array("points");
+        for (const pd::Vec3& x : probe.points) {
+          w.begin_array();
+          for (unsigned int d = 0; d < dim; ++d)
+            w.value("", x[d]);
+          w.end_array();
+        }
+        w.end_array();
+      }
       w.value("value", r.extrapolated);
       w.value("error_estimate", r.error_estimate);
       w.value("observed_order", r.order);
