@@ -207,15 +207,18 @@ template <int dim>
 unsigned int SceneReference<dim>::choose_levels() const {
   if (options.levels > 0)
     return options.levels;
-  if (options.coarse)
+  if (options.coarse && !on_mesh_body)
     return 3;
   const double dofs0 = estimated_dofs(dim, triangulation.n_active_cells(), on_mesh_body);
   unsigned int n = 1;
   while (n < 8 && dofs0 * std::pow(2., dim * n) <= budget())
     ++n;
-  // A mesh body's level 0 is already as fine as the particles: two levels give the estimate
-  // (their difference) where a third would not fit.
-  return std::max(on_mesh_body ? 2u : 3u, n);
+  // A mesh body's level 0 is already as fine as the particles (its size is not the budget's to
+  // choose): two levels give the estimate (their difference) where a third would not fit, and
+  // --coarse runs at most three.
+  if (on_mesh_body)
+    return std::clamp(n, 2u, options.coarse ? 3u : 8u);
+  return std::max(3u, n);
 }
 
 // Why: supports become constraints on the dofs whose support points they hold. A fixed or
