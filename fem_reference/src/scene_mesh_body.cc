@@ -198,6 +198,14 @@ void mesh_body_level(const SceneProblem& problem, const unsigned int level,
     for (unsigned int k = 0; k < level; ++k)
       gmsh::model::mesh::refine();
     // Only the body's cells are written: one physical group of its entities of dimension dim.
+    gmsh::vectorpair groups;
+    gmsh::model::getPhysicalGroups(groups);
+    for (const auto& [d, tag] : groups) {
+      std::string name;
+      gmsh::model::getPhysicalName(d, tag, name);
+      if (!name.empty())
+        gmsh::model::removePhysicalName(name);
+    }
     gmsh::model::removePhysicalGroups();
     gmsh::vectorpair entities;
     gmsh::model::getEntities(entities, dim);
