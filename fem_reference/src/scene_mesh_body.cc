@@ -124,6 +124,27 @@ void MeshBodyElements::build_locator() {
   }
 }
 
+double MeshBodyElements::element_size() const {
+  double measure = 0.;
+  for (const auto& c : corners) {
+    std::array<pd::Vec3, 3> e{};
+    for (std::size_t k = 0; k < 3; ++k)
+      for (std::size_t a = 0; a < 3; ++a)
+        e[k][a] = c[k + 1][a] - c[0][a];
+    if (dim == 2)
+      measure += 0.5 * std::abs(e[0][0] * e[1][1] - e[0][1] * e[1][0]);
+    else
+      measure += std::abs(e[0][0] * (e[1][1] * e[2][2] - e[1][2] * e[2][1]) -
+                          e[0][1] * (e[1][0] * e[2][2] - e[1][2] * e[2][0]) +
+                          e[0][2] * (e[1][0] * e[2][1] - e[1][1] * e[2][0])) /
+                 6.;
+  }
+  measure /= static_cast<double>(corners.size());
+  // Regular triangle: A = √3/4 a²; regular tetrahedron: V = a³/(6√2).
+  return dim == 2 ? std::sqrt(4. * measure / std::sqrt(3.))
+                  : std::cbrt(6. * std::sqrt(2.) * measure);
+}
+
 long MeshBodyElements::element_at(const pd::Vec3& p) const {
   std::array<long, 3> b{0, 0, 0};
   for (std::size_t a = 0; a < static_cast<std::size_t>(dim); ++a)

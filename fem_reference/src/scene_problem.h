@@ -69,6 +69,9 @@ struct MeshBodyElements {
   std::vector<std::array<pd::Vec3, 4>> corners;
 
   std::size_t size() const { return corners.size(); }
+  // The edge of the regular simplex of the elements' mean measure: a mesh file's h (a geometry
+  // is meshed at λ).
+  double element_size() const;
   // The element holding p (the one whose smallest barycentric coordinate is largest, among
   // those near p); -1 if no element is within a tenth of its own size of p.
   long element_at(const pd::Vec3& p) const;

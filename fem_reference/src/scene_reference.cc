@@ -180,8 +180,8 @@ void SceneReference<dim>::make_grid(const unsigned int level) {
     mesh(base_size, level);
     return;
   }
-  if (on_mesh_body) { // level 0 is the particles' own mesh, of element size λ
-    base_size = problem.spacing;
+  if (on_mesh_body) { // level 0 is the particles' own mesh
+    base_size = problem.mesh_body->element_size();
     mesh(base_size, 0);
     return;
   }
