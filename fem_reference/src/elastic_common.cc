@@ -34,7 +34,13 @@ void initialize_amg(const DoFHandler<dim>& dof_handler,
   const auto n = dof_handler.n_dofs();
   const auto& fe = dof_handler.get_fe();
   std::vector<Point<dim>> support_points(n);
-  DoFTools::map_dofs_to_support_points(MappingQ1<dim>(), dof_handler, support_points);
+  // Simplices (mesh bodies) have no MappingQ1: their own linear mapping.
+  if (fe.reference_cell().is_hyper_cube())
+    DoFTools::map_dofs_to_support_points(MappingQ1<dim>(), dof_handler, support_points);
+  else
+    DoFTools::map_dofs_to_support_points(
+        fe.reference_cell().template get_default_linear_mapping<dim, dim>(), dof_handler,
+        support_points);
   std::vector<unsigned int> dof_component(n, 0);
   std::vector<types::global_dof_index> dofs(fe.n_dofs_per_cell());
   for (const auto& cell : dof_handler.active_cell_iterators()) {

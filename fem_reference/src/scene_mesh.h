@@ -35,4 +35,9 @@ void box_grid(const SceneProblem& problem, double h, Triangulation<dim>& triangu
 template <int dim>
 void gmsh_mesh(const SceneProblem& problem, double h0, unsigned int level,
                const std::filesystem::path& msh_file, Triangulation<dim>& triangulation);
+// Level `level` of a mesh body's sequence (SceneProblem::mesh_body): its elements, as libpd
+// made the particles of them, split `level` times by Gmsh; `msh_file` receives it. Simplices.
+template <int dim>
+void mesh_body_level(const SceneProblem& problem, unsigned int level,
+                     const std::filesystem::path& msh_file, Triangulation<dim>& triangulation);
 } // namespace pdfem

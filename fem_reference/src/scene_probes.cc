@@ -23,7 +23,6 @@ template <int dim>
 double SceneReference<dim>::reaction(const SceneProbe& probe) const {
   using Q = pd::ProbeSpec::Quantity;
   const bool moment = probe.quantity == Q::moment;
-  const QGauss<dim> quadrature(fe.degree + 1);
   FEValues<dim> fv(*mapping, fe, quadrature,
                    update_values | update_gradients | update_quadrature_points | update_JxW_values);
   std::set<types::global_dof_index> wanted;

@@ -100,15 +100,32 @@ void check_supported(const pd::Scene& scene) {
     throw std::runtime_error("pd-fem --scene: the scene has the pre-crack '" +
                              m.cracks.front().name +
                              "'; the FE reference represents 2D cracks (segments) only");
-  // The FE domain is built from boxes and shapes; a body of given particles has only their
-  // bounding box as its region, which is not its shape.
-  for (const pd::BodySpec& b : m.bodies)
-    if (b.points)
-      throw std::runtime_error(
-          "pd-fem --scene: body '" + b.name + "' is " +
-          (b.mesh ? "the mesh of '" + b.mesh_file +
-                        "'; an FE reference on the same geometry is not built yet"
-                  : std::string("given as particles; the FE reference needs its shape")));
+  // The FE domain is built from boxes and shapes, or from one mesh body's elements; a body of
+  // given particles has only their bounding box as its region, which is not its shape.
+  const pd::BodySpec* mesh = nullptr;
+  for (const pd::BodySpec& b : m.bodies) {
+    if (!b.points)
+      continue;
+    if (!b.mesh)
+      throw std::runtime_error("pd-fem --scene: body '" + b.name +
+                               "' is given as particles; the FE reference needs its shape");
+    if (mesh != nullptr)
+      throw std::runtime_error("pd-fem --scene: bodies '" + mesh->name + "' and '" + b.name +
+                               "' are both meshes; the FE reference takes one mesh body");
+    mesh = &b;
+  }
+  if (mesh != nullptr) {
+    if (!m.cracks.empty())
+      throw std::runtime_error("pd-fem --scene: the scene has the pre-crack '" +
+                               m.cracks.front().name + "' in the mesh body '" + mesh->name +
+                               "'; the FE reference on mesh bodies has no cracks");
+    for (const pd::LoadSpec& l : m.loads)
+      if (l.load.kind == pd::BoxRegionLoad::Kind::pressure)
+        throw std::runtime_error("pd-fem --scene: pressure load '" + l.name +
+                                 "' on the mesh body '" + mesh->name +
+                                 "'; the FE reference on mesh bodies takes region, point and "
+                                 "body loads");
+  }
   if (m.lattice.convention != pd::LatticeConvention::cell_centered)
     std::cerr << "pd-fem: warning: node-based lattice: its particles stand λ/2 beyond the boxes' "
                  "faces; the FE body is the boxes themselves\n";
@@ -134,8 +151,19 @@ LatticeCells cells_of(const pd::ModelSpec& spec, const pd::ParticleSet& particle
   return cells;
 }
 
+// Why: on a mesh body a particle stands for its element, so a set of its particles (a load's, a
+// support's) acts on the union of their elements. Particles of other bodies are not counted.
+std::vector<std::uint8_t> elements_of(const MeshBodyElements& mesh,
+                                      const std::vector<std::uint32_t>& members) {
+  std::vector<std::uint8_t> out(mesh.size(), 0);
+  for (const std::uint32_t i : members)
+    if (i >= mesh.first_particle && i < mesh.first_particle + mesh.size())
+      out[i - mesh.first_particle] = 1;
+  return out;
+}
+
 SceneLoad translate_load(const pd::ModelSpec& spec, const pd::ParticleSet& particles,
-                         const pd::LoadSpec& load) {
+                         const pd::LoadSpec& load, const std::optional<MeshBodyElements>& mesh) {
   SceneLoad out;
   out.name = load.name;
   using Kind = pd::BoxRegionLoad::Kind;
@@ -155,6 +183,11 @@ SceneLoad translate_load(const pd::ModelSpec& spec, const pd::ParticleSet& parti
   if (members.empty())
     throw std::runtime_error("load '" + load.name + "' acts on no particle");
   out.cells = cells_of(spec, particles, members);
+  if (mesh) {
+    out.elements = elements_of(*mesh, members);
+    if (std::count(out.elements.begin(), out.elements.end(), 1) == 0)
+      throw std::runtime_error("load '" + load.name + "' acts on no particle of the mesh body");
+  }
   out.bounds = cell_bounds(out.cells);
   out.conforming = load.load.kind != Kind::point;
   switch (load.load.kind) {
@@ -175,6 +208,50 @@ SceneLoad translate_load(const pd::ModelSpec& spec, const pd::ParticleSet& parti
     break;
   }
   return out;
+}
+
+// Why: the FE meshes of a mesh body are its elements refined, so the body must be the whole FE
+// domain (lattice bodies only where mirror supports take them away) and its elements must be
+// the particles libpd made: each particle is checked to be its element's centroid.
+MeshBodyElements mesh_body_of(const pd::ModelSpec& spec, const pd::ParticleSet& particles,
+                              const std::size_t body, const std::vector<pd::Region>& removed) {
+  const int dim = spec.dimension.dim;
+  const double tol = 1e-6 * spec.lattice.spacing;
+  const pd::BodySpec& b = spec.bodies[body];
+  for (std::size_t i = 0; i < particles.size(); ++i) {
+    if (particles.body[i] == body)
+      continue;
+    const bool taken = std::any_of(removed.begin(), removed.end(), [&](const pd::Region& r) {
+      return r.contains(particles.position[i], dim, tol);
+    });
+    if (!taken)
+      throw std::runtime_error(
+          "pd-fem --scene: body '" + spec.bodies[particles.body[i]].name +
+          "' is a lattice body beside the mesh body '" + b.name +
+          "'; the FE reference on a mesh body takes it alone (lattice bodies only behind "
+          "mirror supports)");
+  }
+  MeshBodyElements mesh = read_mesh_body_elements(b, body, dim, spec.lattice.spacing);
+  const auto first = std::find(particles.body.begin(), particles.body.end(), body);
+  mesh.first_particle = static_cast<std::size_t>(first - particles.body.begin());
+  const auto count = static_cast<std::size_t>(
+      std::count(particles.body.begin(), particles.body.end(), static_cast<std::uint16_t>(body)));
+  if (count != mesh.size())
+    throw std::runtime_error("pd-fem --scene: '" + b.mesh_file + "' read again has " +
+                             std::to_string(mesh.size()) + " elements, libpd made " +
+                             std::to_string(count) + " particles of it");
+  for (std::size_t e = 0; e < mesh.size(); ++e) {
+    pd::Vec3 centroid{0, 0, 0};
+    for (int k = 0; k <= dim; ++k)
+      for (std::size_t a = 0; a < 3; ++a)
+        centroid[a] += mesh.corners[e][static_cast<std::size_t>(k)][a] / (dim + 1);
+    const pd::Vec3& x = particles.position[mesh.first_particle + e];
+    for (std::size_t a = 0; a < 3; ++a)
+      if (std::abs(centroid[a] - x[a]) > 1e-6 * spec.lattice.spacing)
+        throw std::runtime_error("pd-fem --scene: element " + std::to_string(e) + " of '" +
+                                 b.mesh_file + "' read again is not where libpd's particle is");
+  }
+  return mesh;
 }
 
 std::size_t support_index(const pd::Scene& scene, const pd::ProbeSpec& probe) {
@@ -255,6 +332,8 @@ bool SceneProblem::in_domain(const pd::Vec3& p, const double tol) const {
 }
 
 int SceneProblem::body_at(const pd::Vec3& p) const {
+  if (mesh_body) // the FE domain is the mesh body's elements (lattice bodies stand behind clamps)
+    return static_cast<int>(mesh_body->body);
   for (std::size_t b = 0; b < bodies.size(); ++b)
     if (bodies[b].region.contains(p, dim(), 0.))
       return static_cast<int>(b);
@@ -314,12 +393,23 @@ SceneProblem translate_scene(const pd::Scene& scene) {
   p.curved = p.curved || !p.cracks.empty();
 
   const pd::ParticleSet particles = scene_particles(scene);
+  for (std::size_t b = 0; b < spec.bodies.size(); ++b)
+    if (spec.bodies[b].mesh)
+      p.mesh_body = mesh_body_of(spec, particles, b, p.removed);
+  if (p.mesh_body)
+    for (const pd::SupportSpec& s : spec.supports) {
+      std::vector<std::uint32_t> held;
+      for (std::uint32_t i = 0; i < particles.size(); ++i)
+        if (s.region.contains(particles.position[i], dim, p.tolerance()))
+          held.push_back(i);
+      p.support_elements.push_back(elements_of(*p.mesh_body, held));
+    }
   // Why: a load's cells become grid planes of the tensor-product grid (nested, exact) and, for
   // region loads (layers, patches), faces of a Gmsh mesh. A point load's cells do not: many of
   // them on a curved body made as many small features and slivers between them (80 loads on a
   // hole failed after minutes); the load integrals resolve those cells by quadrature.
   for (const pd::LoadSpec& load : spec.loads) {
-    p.loads.push_back(translate_load(spec, particles, load));
+    p.loads.push_back(translate_load(spec, particles, load, p.mesh_body));
     const SceneLoad& l = p.loads.back();
     if (l.conforming && !l.pressure)
       p.conforming.push_back(l.bounds);

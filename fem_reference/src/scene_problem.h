@@ -8,6 +8,7 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <set>
 #include <string>
 #include <vector>
@@ -32,6 +33,9 @@ struct SceneLoad {
   bool density = false;    // true: `value` is a force density [N/m³] (kind body)
   pd::Vec3 value{0, 0, 0}; // the total force [N] spread over `cells`, or the density
   LatticeCells cells;
+  // A mesh body's particles among them (per element of SceneProblem::mesh_body): PD shares the
+  // load over those elements, so the density acts on their union.
+  std::vector<std::uint8_t> elements;
   pd::Box bounds;         // of `cells`
   bool conforming = true; // the Gmsh mesh has faces on `bounds` (not for point loads)
   // A pressure [Pa] on the mesh's boundary faces that lie on `surface` (instead of cells).
@@ -50,6 +54,34 @@ struct SceneProbe {
   std::size_t support = 0;      // reaction, moment: index into SceneProblem::supports
   pd::Vec3 about{0, 0, 0};      // moment
   pd::Vec3 direction{0, 0, 0};  // opening: unit vector from 'point' to 'to'
+};
+
+// A body read from a mesh or a geometry file (pd::BodySpec::mesh): the elements libpd made its
+// particles of, read again through Gmsh as libpd reads them (particle k of the body is element
+// k), so that the FE meshes are this mesh refined and a region of particles is the union of
+// their elements. Linear simplices only (triangles, tetrahedra): dim + 1 corners each.
+struct MeshBodyElements {
+  std::string file;
+  bool geometry = false;          // meshed from a geometry file at the lattice spacing
+  std::size_t body = 0;           // index into SceneProblem::bodies
+  std::size_t first_particle = 0; // its particles: [first_particle, first_particle + size())
+  int dim = 3;
+  std::vector<std::array<pd::Vec3, 4>> corners;
+
+  std::size_t size() const { return corners.size(); }
+  // The edge of the regular simplex of the elements' mean measure: a mesh file's h (a geometry
+  // is meshed at λ).
+  double element_size() const;
+  // The element holding p (the one whose smallest barycentric coordinate is largest, among
+  // those near p); -1 if no element is within a tenth of its own size of p.
+  long element_at(const pd::Vec3& p) const;
+  void build_locator();
+
+private:
+  pd::Vec3 origin_{0, 0, 0};
+  double step_ = 1.;
+  std::array<long, 3> bins_{1, 1, 1};
+  std::vector<std::vector<std::uint32_t>> grid_; // elements whose bounding box meets each bin
 };
 
 // A solid of the scene's geometry as Gmsh builds it: a box or one of pd::Region's shapes.
@@ -81,6 +113,11 @@ struct SceneProblem {
   std::vector<pd::Box> conforming;
   std::vector<pd::Crack> cracks; // 2D segments: slits, both faces traction-free (Gmsh only)
   bool curved = false;
+  // The scene's body is a mesh (one mesh body; lattice bodies only behind mirror clamps): the FE
+  // meshes are its elements refined (scene_mesh.h, mesh_body_level), and fixed or displaced
+  // supports hold the union of their particles' elements (per support, per element).
+  std::optional<MeshBodyElements> mesh_body;
+  std::vector<std::vector<std::uint8_t>> support_elements;
   pd::Box bounding_box;                      // of the domain
   std::array<std::vector<double>, 3> planes; // per axis: every box face of the scene (sorted)
 
@@ -97,6 +134,11 @@ struct SceneProblem {
   // Tolerance of region membership, as libpd's: 1e-6 λ.
   double tolerance() const { return 1e-6 * spacing; }
 };
+
+// The elements of mesh body `body` (bodies[index]) as libpd made its particles (Gmsh, in
+// scene_mesh_body.cc); throws std::runtime_error for elements other than linear simplices.
+MeshBodyElements read_mesh_body_elements(const pd::BodySpec& body, std::size_t index, int dim,
+                                         double spacing);
 
 // Read `path` with pd::load_scene (throws pd::SceneError) and translate it. Throws
 // std::runtime_error naming any feature the FE problem cannot represent (damage, plasticity,

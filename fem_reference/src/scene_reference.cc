@@ -37,7 +37,9 @@
 #include <deal.II/base/quadrature_lib.h>
 #include <deal.II/dofs/dof_tools.h>
 #include <deal.II/fe/fe_q.h>
+#include <deal.II/fe/fe_simplex_p.h>
 #include <deal.II/fe/fe_values.h>
+#include <deal.II/fe/mapping_fe.h>
 #include <deal.II/fe/mapping_q.h>
 #include <deal.II/fe/mapping_q1.h>
 #include <deal.II/lac/dynamic_sparsity_pattern.h>
@@ -63,13 +65,33 @@ pd::Vec3 to_vec3(const Point<dim>& p) {
   return v;
 }
 
+// Why: quadratic elements everywhere; a mesh body's cells are simplices (its own elements
+// refined), every other mesh has quadrilaterals or hexahedra.
+template <int dim>
+std::unique_ptr<FiniteElement<dim>> base_element(const bool simplex) {
+  if (simplex)
+    return std::make_unique<FE_SimplexP<dim>>(2);
+  return std::make_unique<FE_Q<dim>>(2);
+}
+
+template <int dim>
+Quadrature<dim> cell_quadrature(const bool simplex) {
+  if (simplex)
+    return QGaussSimplex<dim>(3);
+  return QGauss<dim>(3);
+}
 } // namespace
 
 template <int dim>
 SceneReference<dim>::SceneReference(const SceneProblem& p, const SceneOptions& o)
-    : problem(p), options(o), fe(FE_Q<dim>(2), dim), use_gmsh(p.curved || o.gmsh) {
-  // Gmsh meshes may have curved boundary faces (scene_mesh.cc): map them with quadratics.
-  if (use_gmsh)
+    : problem(p), options(o), on_mesh_body(p.mesh_body.has_value()),
+      fe(*base_element<dim>(on_mesh_body), dim), quadrature(cell_quadrature<dim>(on_mesh_body)),
+      use_gmsh(!on_mesh_body && (p.curved || o.gmsh)) {
+  // Gmsh meshes may have curved boundary faces (scene_mesh.cc): map them with quadratics. A mesh
+  // body's straight-sided simplices map linearly.
+  if (on_mesh_body)
+    mapping = std::make_unique<MappingFE<dim>>(FE_SimplexP<dim>(1));
+  else if (use_gmsh)
     mapping = std::make_unique<MappingQ<dim>>(2);
   else
     mapping = std::make_unique<MappingQ1<dim>>();
@@ -80,8 +102,11 @@ SceneReference<dim>::SceneReference(const SceneProblem& p, const SceneOptions& o
 }
 
 namespace {
-// Unknowns of a Q2 vector field on n cells, roughly: 2^dim nodes per cell, dim components.
-double estimated_dofs(const int dim, const double cells) {
+// Unknowns of a quadratic vector field on n cells, roughly, dim components: Q2 2^dim nodes per
+// cell; P2 on simplices (vertices and edges) about 2 per triangle and 1.4 per tetrahedron.
+double estimated_dofs(const int dim, const double cells, const bool simplex = false) {
+  if (simplex)
+    return dim * (dim == 2 ? 2. : 1.4) * cells;
   return dim * std::pow(2., dim) * cells;
 }
 
@@ -96,8 +121,8 @@ double estimated_dofs(const int dim, const double cells) {
 // boundary nodes add a quarter to estimated_dofs (the 3D cantilever's levels: 18,603 and
 // 133,875 unknowns for 14,976 and 119,808). Measured there at 133,875 unknowns: a 935 MB factor
 // and 2.45 GB peak, estimated 2.8 GB.
-double estimated_level_bytes(const int dim, const double cells) {
-  const double dofs = 1.25 * estimated_dofs(dim, cells);
+double estimated_level_bytes(const int dim, const double cells, const bool simplex) {
+  const double dofs = 1.25 * estimated_dofs(dim, cells, simplex);
   const double row = dim == 3 ? 3. * 64. * 12. : 2. * 16. * 12.;
   double bytes = 5. * row * dofs;
   if (dofs <= static_cast<double>(direct_solver_max_dofs(dim)))
@@ -120,7 +145,18 @@ double SceneReference<dim>::budget() const {
 
 template <int dim>
 void SceneReference<dim>::mesh(const double h0, const unsigned int level) {
-  if (use_gmsh) {
+  if (on_mesh_body) {
+    dof_handler.reset();
+    mesh_body_level(problem, level, options.output_directory / "mesh.msh", triangulation);
+    cell_element.assign(triangulation.n_active_cells(), -1);
+    for (const auto& cell : triangulation.active_cell_iterators()) {
+      const long e = problem.mesh_body->element_at(to_vec3(cell->center()));
+      if (e < 0)
+        throw std::runtime_error("a cell of the refined mesh lies in no element of '" +
+                                 problem.mesh_body->file + "'");
+      cell_element[cell->active_cell_index()] = e;
+    }
+  } else if (use_gmsh) {
     dof_handler.reset();
     gmsh_mesh(problem, h0, level, options.output_directory / "mesh.msh", triangulation);
   } else if (level == 0) {
@@ -142,6 +178,11 @@ template <int dim>
 void SceneReference<dim>::make_grid(const unsigned int level) {
   if (level > 0) {
     mesh(base_size, level);
+    return;
+  }
+  if (on_mesh_body) { // level 0 is the particles' own mesh
+    base_size = problem.mesh_body->element_size();
+    mesh(base_size, 0);
     return;
   }
   base_size = base_cell_size(problem, use_gmsh);
@@ -166,12 +207,17 @@ template <int dim>
 unsigned int SceneReference<dim>::choose_levels() const {
   if (options.levels > 0)
     return options.levels;
-  if (options.coarse)
+  if (options.coarse && !on_mesh_body)
     return 3;
-  const double dofs0 = estimated_dofs(dim, triangulation.n_active_cells());
+  const double dofs0 = estimated_dofs(dim, triangulation.n_active_cells(), on_mesh_body);
   unsigned int n = 1;
   while (n < 8 && dofs0 * std::pow(2., dim * n) <= budget())
     ++n;
+  // A mesh body's level 0 is already as fine as the particles (its size is not the budget's to
+  // choose): two levels give the estimate (their difference) where a third would not fit, and
+  // --coarse runs at most three.
+  if (on_mesh_body)
+    return std::clamp(n, 2u, options.coarse ? 3u : 8u);
   return std::max(3u, n);
 }
 
@@ -202,10 +248,24 @@ void SceneReference<dim>::setup_system() {
   for (std::size_t s = 0; s < problem.supports.size(); ++s) {
     const pd::SupportSpec& sup = problem.supports[s];
     const bool whole_planes = sup.region.boxes.empty() && sup.region.shapes.empty();
+    // On a mesh body a fixed or displaced support holds the union of its particles' elements:
+    // every node of the cells refined from them. Mirror and symmetry planes stay planes.
+    std::vector<std::uint8_t> in_elements;
+    const bool by_elements = on_mesh_body && !sup.mirrors() && !sup.symmetric();
+    if (by_elements) {
+      in_elements.assign(n, 0);
+      for (const auto& cell : dof_handler->active_cell_iterators())
+        if (problem.support_elements[s][static_cast<std::size_t>(
+                cell_element[cell->active_cell_index()])] != 0) {
+          cell->get_dof_indices(dofs);
+          for (const auto i : dofs)
+            in_elements[i] = 1;
+        }
+    }
     for (types::global_dof_index i = 0; i < n; ++i) {
       const pd::Vec3 p = to_vec3(points[i]);
       const unsigned int c = dof_component[i];
-      const bool in_region = sup.region.contains(p, dim, tol);
+      const bool in_region = by_elements ? in_elements[i] != 0 : sup.region.contains(p, dim, tol);
       bool held = false;
       double g = 0.;
       for (unsigned int a = 0; a < dim; ++a) {
@@ -305,7 +365,6 @@ void SceneReference<dim>::pin_rigid_motion(std::map<types::global_dof_index, dou
 // dofs' rows are cleared).
 template <int dim>
 void SceneReference<dim>::require_balanced_loads() const {
-  const QGauss<dim> quadrature(fe.degree + 1);
   FEValues<dim> fv(*mapping, fe, quadrature, update_quadrature_points | update_JxW_values);
   Tensor<1, 3> force, moment;
   double scale = 0., size = 0.;
@@ -317,7 +376,7 @@ void SceneReference<dim>::require_balanced_loads() const {
       for (unsigned int a = 0; a < dim; ++a)
         r[a] = x[a] - 0.5 * (problem.bounding_box.lo[a] + problem.bounding_box.hi[a]);
       for (std::size_t l = 0; l < problem.loads.size(); ++l)
-        if (problem.loads[l].cells.contains(x)) {
+        if (!problem.loads[l].pressure && load_acts(l, cell, x)) {
           Tensor<1, 3> f;
           for (unsigned int a = 0; a < dim; ++a)
             f[a] = load_density[l][a] * fv.JxW(q);
@@ -343,7 +402,6 @@ void SceneReference<dim>::require_balanced_loads() const {
 // are subtracted node by node.
 template <int dim>
 void SceneReference<dim>::remove_rigid_motion() {
-  const QGauss<dim> quadrature(fe.degree + 1);
   FEValues<dim> fv(*mapping, fe, quadrature,
                    update_values | update_quadrature_points | update_JxW_values);
   std::vector<Vector<double>> u(quadrature.size(), Vector<double>(dim));
@@ -427,6 +485,16 @@ unsigned int SceneReference<dim>::load_subdivisions(
 }
 
 template <int dim>
+bool SceneReference<dim>::load_acts(const std::size_t l,
+                                    const typename DoFHandler<dim>::active_cell_iterator& cell,
+                                    const pd::Vec3& x) const {
+  const SceneLoad& load = problem.loads[l];
+  if (on_mesh_body)
+    return load.elements[static_cast<std::size_t>(cell_element[cell->active_cell_index()])] != 0;
+  return load.cells.contains(x);
+}
+
+template <int dim>
 template <class Add>
 void SceneReference<dim>::load_quadrature(
     const typename DoFHandler<dim>::active_cell_iterator& cell, FEValues<dim>& fv,
@@ -449,7 +517,6 @@ void SceneReference<dim>::load_quadrature(
 // 2D the problem is per unit thickness t: V = area · t.
 template <int dim>
 void SceneReference<dim>::measure_loads() {
-  const QGauss<dim> quadrature(fe.degree + 1);
   const UpdateFlags flags = update_quadrature_points | update_JxW_values;
   FEValues<dim> fv(*mapping, fe, quadrature, flags);
   std::vector<double> volume(problem.loads.size(), 0.);
@@ -457,8 +524,7 @@ void SceneReference<dim>::measure_loads() {
     fv.reinit(cell);
     load_quadrature(cell, fv, flags, [&](const FEValues<dim>& v, const unsigned int q) {
       for (std::size_t l = 0; l < problem.loads.size(); ++l)
-        if (!problem.loads[l].pressure &&
-            problem.loads[l].cells.contains(to_vec3(v.quadrature_point(q))))
+        if (!problem.loads[l].pressure && load_acts(l, cell, to_vec3(v.quadrature_point(q))))
           volume[l] += v.JxW(q);
     });
   }
@@ -537,7 +603,7 @@ void SceneReference<dim>::cell_system(const typename DoFHandler<dim>::active_cel
                   [&](const FEValues<dim>& v, const unsigned int q) {
                     const pd::Vec3 x = to_vec3(v.quadrature_point(q));
                     for (std::size_t l = 0; l < problem.loads.size(); ++l)
-                      if (!problem.loads[l].pressure && problem.loads[l].cells.contains(x))
+                      if (!problem.loads[l].pressure && load_acts(l, cell, x))
                         for (unsigned int i = 0; i < n; ++i)
                           cell_rhs(i) += v.shape_value_component(i, q, component[i]) *
                                          load_density[l][component[i]] * v.JxW(q);
@@ -548,7 +614,6 @@ void SceneReference<dim>::cell_system(const typename DoFHandler<dim>::active_cel
 template <int dim>
 void SceneReference<dim>::assemble_system() {
   measure_loads();
-  const QGauss<dim> quadrature(fe.degree + 1);
   FEValues<dim> fv(*mapping, fe, quadrature,
                    update_values | update_gradients | update_quadrature_points | update_JxW_values);
   FullMatrix<double> cell_matrix;
@@ -600,6 +665,28 @@ void SceneReference<dim>::output_results(const double wall_time) const {
       w.end_object();
     }
     w.end_array();
+    // What the FE body and its meshes are, beside what PD made of the scene: `pd verify` records
+    // both, so a reader sees which continuum each verdict compares.
+    w.begin_object("domain");
+    if (on_mesh_body) {
+      const MeshBodyElements& m = *problem.mesh_body;
+      w.value("kind", "mesh body");
+      w.value("file", m.file);
+      w.value("pd_particles", static_cast<unsigned long>(m.size()));
+      w.value("description", std::string(dim == 2 ? "P2 triangles" : "P2 tetrahedra") + ": the " +
+                                 std::to_string(m.size()) + " elements of " + m.file +
+                                 (m.geometry ? " meshed by Gmsh at the lattice spacing" : "") +
+                                 " (one PD particle each), split once per level" +
+                                 (m.geometry ? ", new boundary nodes on the CAD surfaces" : ""));
+    } else {
+      w.value("kind", use_gmsh ? "gmsh" : "box grid");
+      w.value("description",
+              use_gmsh ? "Q2 on Gmsh (OpenCASCADE) meshes of the scene's shapes, split once per "
+                         "level"
+                       : "Q2 on a tensor-product grid through the scene's box faces, refined "
+                         "globally per level");
+    }
+    w.end_object();
     w.value("wall_time_s", wall_time);
     if (!stopped_for_memory.empty())
       w.value("refinement_stopped", stopped_for_memory);
@@ -630,6 +717,18 @@ void SceneReference<dim>::output_results(const double wall_time) const {
       for (const double v : values)
         w.value("", v);
       w.end_array();
+      // Where the FE read the probe (the particles libpd resolves for it), for a few points:
+      // on an unstructured set they are not where the scene's `point` says.
+      if (!probe.points.empty() && probe.points.size() <= 16) {
+        w.begin_array("points");
+        for (const pd::Vec3& x : probe.points) {
+          w.begin_array();
+          for (unsigned int d = 0; d < dim; ++d)
+            w.value("", x[d]);
+          w.end_array();
+        }
+        w.end_array();
+      }
       w.value("value", r.extrapolated);
       w.value("error_estimate", r.error_estimate);
       w.value("observed_order", r.order);
@@ -650,7 +749,7 @@ std::vector<SceneLevel> SceneReference<dim>::run() {
     make_grid(level);
     if (level == 0)
       n_levels = choose_levels();
-    const double need = estimated_level_bytes(dim, triangulation.n_active_cells());
+    const double need = estimated_level_bytes(dim, triangulation.n_active_cells(), on_mesh_body);
     if (memory && need > memory->bytes) {
       std::ostringstream what;
       what << "level " << level << " (" << triangulation.n_active_cells()

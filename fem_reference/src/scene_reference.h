@@ -83,8 +83,15 @@ private:
   const SceneProblem& problem;
   const SceneOptions options;
 
+  // Does load l act at x, a point of `cell` (its lattice cells; on a mesh body the elements
+  // the cell was refined from)?
+  bool load_acts(std::size_t l, const typename DoFHandler<dim>::active_cell_iterator& cell,
+                 const pd::Vec3& x) const;
+
   Triangulation<dim> triangulation;
+  const bool on_mesh_body; // the scene's body is a mesh: simplices refined from its elements
   const FESystem<dim> fe;
+  const Quadrature<dim> quadrature; // of the cells' integrals: Gauss, degree + 1 points per axis
   const bool use_gmsh;
   std::unique_ptr<Mapping<dim>> mapping;
   std::unique_ptr<DoFHandler<dim>> dof_handler;
@@ -105,6 +112,7 @@ private:
   // Per load: force density [N/m³] on its cells on this level's mesh.
   std::vector<Tensor<1, dim>> load_density;
   std::vector<SceneLevel> levels;
+  std::vector<long> cell_element; // mesh body: per active cell, the element it was refined from
   std::string stopped_for_memory; // why refinement stopped before the levels asked for
 };
 } // namespace pdfem

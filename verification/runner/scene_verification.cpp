@@ -137,6 +137,25 @@ Json probe_row(const ProbeSpec& p) {
   return row;
 }
 
+/// What each side made of the scene: PD's bodies (a mesh body names its file) and the FE's
+/// domain and meshes, as fe.json states them, so a verdict says which continuum it compares.
+void describe_sides(const Scene& scene, const YAML::Node& fe, Json& out) {
+  Json& bodies = out["pd_bodies"];
+  bodies = Json::array();
+  for (const BodySpec& b : scene.model.bodies) {
+    Json row;
+    row["name"] = b.name;
+    row["source"] = b.mesh ? std::string(b.mesh_is_geometry ? "geometry " : "mesh ") + b.mesh_file
+                    : b.points ? std::string("particles")
+                               : std::string("lattice");
+    bodies.push_back(row);
+  }
+  if (fe["domain"] && fe["domain"]["description"]) {
+    out["fe_domain"] = fe["domain"]["description"].as<std::string>();
+    fmt::print("   FE: {}\n", fe["domain"]["description"].as<std::string>());
+  }
+}
+
 } // namespace
 
 Json verify_scene(const std::filesystem::path& scene_path, const Context& ctx,
@@ -169,6 +188,7 @@ Json verify_scene(const std::filesystem::path& scene_path, const Context& ctx,
       static_cast<double>(pd.bonds) * static_cast<double>(pd.result.force_evaluations);
   out["fe_seconds"] = fe_wall;
   out["fe_model"] = fe["model"] ? fe["model"].as<std::string>() : std::string();
+  describe_sides(scene, fe, out);
   // The materials PD's summary.json records, beside fe.json's: both solvers solved one problem.
   if (const Json* materials = pd.summary.find("materials")) {
     out["materials"] = *materials;
