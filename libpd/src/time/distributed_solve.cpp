@@ -133,8 +133,8 @@ public:
     int reason = 0;
     long long iterations = 0;
     char error[512] = "";
-    const int status = solve_(solver_, rhs.data(), x.data(), &reason, &iterations, error,
-                              sizeof error);
+    const int status =
+        solve_(solver_, rhs.data(), x.data(), &reason, &iterations, error, sizeof error);
     rethrow_stop_failure();
     if (status == pd_petsc_stopped) {
       throw StopRequested("a stop was requested during the distributed static solve");
@@ -237,7 +237,7 @@ private:
   void* solver_ = nullptr;
   void (*destroy_)(void*) = nullptr;
   int (*solve_)(void*, const double*, double*, int*, long long*, char*, std::size_t) = nullptr;
-  std::vector<std::size_t> owned_unknowns_; ///< d's index of each owned unknown
+  std::vector<std::size_t> owned_unknowns_;  ///< d's index of each owned unknown
   std::vector<std::int32_t> row_of_unknown_; ///< per unknown of d (owned or halo): its row
   long long first_row_ = 0;
   int block_size_ = 1;

@@ -207,8 +207,8 @@ void* create(const pd_petsc_system* system, char* error, std::size_t error_size)
   return nullptr;
 }
 
-int solve(void* solver, const double* b, double* x, int* reason, long long* iterations,
-          char* error, std::size_t error_size) {
+int solve(void* solver, const double* b, double* x, int* reason, long long* iterations, char* error,
+          std::size_t error_size) {
   try {
     return static_cast<PetscAmgSolve*>(solver)->solve(b, x, *reason, *iterations)
                ? pd_petsc_ok

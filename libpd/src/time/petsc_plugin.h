@@ -13,11 +13,11 @@ extern "C" {
 /// The rows are the rank's owned unknowns; rows are numbered rank by rank from first_row.
 struct pd_petsc_system {
   MPI_Comm comm;
-  std::size_t owned;                 ///< rows on this rank
-  long long first_row;               ///< the global number of its first row
-  const std::size_t* owned_unknown;  ///< per row: its local unknown (a row of the CSR below)
-  const int* row_offsets;            ///< the local stiffness, CSR over the local unknowns
-  const int* columns;                ///< (local unknowns)
+  std::size_t owned;                ///< rows on this rank
+  long long first_row;              ///< the global number of its first row
+  const std::size_t* owned_unknown; ///< per row: its local unknown (a row of the CSR below)
+  const int* row_offsets;           ///< the local stiffness, CSR over the local unknowns
+  const int* columns;               ///< (local unknowns)
   const double* values;
   const std::int32_t* row_of_unknown; ///< per local unknown: its global row (every one has one)
   const double* coordinate;           ///< per row: its unknown's reference coordinate
