@@ -1,6 +1,7 @@
 // Loading plug-ins (core/plugin.hpp).
 #include "libpd/core/plugin.hpp"
 
+#include <algorithm>
 #include <cstdlib>
 #include <dlfcn.h>
 #include <filesystem>
@@ -29,7 +30,14 @@ std::vector<std::string> plugin_folders() {
 #ifdef LIBPD_PLUGIN_BUILD_DIR
   folders.emplace_back(LIBPD_PLUGIN_BUILD_DIR);
 #endif
-  return folders;
+  // The build tree's programs find the build folder by their own path too: try each once.
+  std::vector<std::string> unique;
+  for (const std::string& f : folders) {
+    if (std::find(unique.begin(), unique.end(), f) == unique.end()) {
+      unique.push_back(f);
+    }
+  }
+  return unique;
 }
 
 /// The table from the module at `path`, or null with the reason in `why`. A module that loads
@@ -38,7 +46,7 @@ const void* try_load(const PluginSpec& spec, const std::string& path, std::strin
   void* handle = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
   if (!handle) {
     const char* error = dlerror();
-    why = error ? error : "dlopen failed";
+    why = error ? error : path + ": dlopen failed"; // dlerror() names the file
     return nullptr;
   }
   using Entry = const void* (*)();
@@ -46,14 +54,14 @@ const void* try_load(const PluginSpec& spec, const std::string& path, std::strin
   const auto entry = reinterpret_cast<Entry>(dlsym(handle, spec.entry));
   if (!entry) {
     const char* error = dlerror();
-    why = error ? error : std::string("no symbol ") + spec.entry;
+    why = error ? error : path + ": no symbol " + spec.entry;
     dlclose(handle);
     return nullptr;
   }
   const void* table = entry();
   const std::uint32_t version = table ? *static_cast<const std::uint32_t*>(table) : 0;
   if (version != spec.version) {
-    why = "interface version " + std::to_string(version) + ", this libpd needs " +
+    why = path + ": interface version " + std::to_string(version) + ", this libpd needs " +
           std::to_string(spec.version) + " (a plug-in from another build of libpd)";
     dlclose(handle);
     return nullptr;
@@ -78,11 +86,11 @@ const void* load_plugin(const PluginSpec& spec) {
       loaded.emplace(spec.module, table);
       return table;
     }
-    tried += "\n  " + path + ": " + why;
+    tried += (tried.empty() ? "" : "; ") + why;
   }
   throw PluginError(std::string(spec.feature) + " needs the plug-in " + spec.module +
                     ", which could not be loaded (set LIBPD_PLUGIN_DIR to the folder holding "
-                    "it). Tried:" +
+                    "it); tried " +
                     tried);
 }
 
