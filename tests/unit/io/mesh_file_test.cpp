@@ -14,12 +14,14 @@
 #include <numeric>
 #include <set>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <tuple>
 #include <vector>
 
 #ifdef LIBPD_TEST_GMSH
-#include <gmsh.h>
+#include <dlfcn.h>
+#include <gmshc.h>
 #endif
 
 namespace {
@@ -359,6 +361,59 @@ BooleanDifference(3) = {Surface{1}; Delete;}{Surface{2}; Delete;};
 Physical Surface("plate") = {3};
 )";
 
+#ifdef LIBPD_TEST_GMSH
+/// A symbol of Gmsh's C API, the library opened at run time: this test binary does not link Gmsh,
+/// so that it starts without loading it, as pd does (tests/cli/plugins.py).
+template <class F>
+F* gmsh_function(const char* name) {
+  static void* const gmsh = dlopen(LIBPD_TEST_GMSH, RTLD_NOW | RTLD_LOCAL);
+  if (!gmsh) {
+    throw std::runtime_error(std::string("cannot open Gmsh: ") + dlerror());
+  }
+  void* f = dlsym(gmsh, name);
+  if (!f) {
+    throw std::runtime_error(std::string("Gmsh has no ") + name);
+  }
+  return reinterpret_cast<F*>(f);
+}
+#define GMSH(name) gmsh_function<decltype(name)>(#name)
+
+/// The number of elements of dimension `dim` Gmsh itself makes of `geo` at elements of size at
+/// most `size`, independently of libpd.
+std::size_t gmsh_element_count(const std::string& geo, int dim, double size) {
+  int ierr = 0;
+  GMSH(gmshInitialize)(0, nullptr, 0, &ierr);
+  GMSH(gmshOptionSetNumber)("General.Terminal", 0, &ierr);
+  GMSH(gmshOptionSetNumber)("General.NumThreads", 1, &ierr);
+  GMSH(gmshOpen)(geo.c_str(), &ierr);
+  GMSH(gmshOptionSetNumber)("Mesh.MeshSizeMax", size, &ierr);
+  GMSH(gmshModelMeshGenerate)(dim, &ierr);
+  int* types = nullptr;
+  std::size_t types_n = 0, tags_nn = 0, nodes_nn = 0;
+  std::size_t **tags = nullptr, **nodes = nullptr;
+  std::size_t *tags_n = nullptr, *nodes_n = nullptr;
+  GMSH(gmshModelMeshGetElements)
+  (&types, &types_n, &tags, &tags_n, &tags_nn, &nodes, &nodes_n, &nodes_nn, dim, -1, &ierr);
+  EXPECT_EQ(ierr, 0);
+  std::size_t count = 0;
+  const auto free = GMSH(gmshFree);
+  for (std::size_t t = 0; t < tags_nn; ++t) {
+    count += tags_n[t];
+    free(tags[t]);
+  }
+  for (std::size_t t = 0; t < nodes_nn; ++t) {
+    free(nodes[t]);
+  }
+  free(types);
+  free(tags);
+  free(tags_n);
+  free(nodes);
+  free(nodes_n);
+  GMSH(gmshFinalize)(&ierr);
+  return count;
+}
+#endif
+
 TEST_F(MeshFile, GeometryWithAHoleIsMeshedAtTheSpacing) {
   const fs::path dir = temp_folder("geo");
   const std::string geo = write(dir / "plate.geo", plate_with_hole_geo);
@@ -383,20 +438,7 @@ TEST_F(MeshFile, GeometryWithAHoleIsMeshedAtTheSpacing) {
   EXPECT_EQ(again.cloud.volume, body.cloud.volume);
 #ifdef LIBPD_TEST_GMSH
   // The element count Gmsh itself makes of the file at that size.
-  gmsh::initialize(0, nullptr, false);
-  gmsh::option::setNumber("General.Terminal", 0);
-  gmsh::option::setNumber("General.NumThreads", 1);
-  gmsh::open(geo);
-  gmsh::option::setNumber("Mesh.MeshSizeMax", spacing);
-  gmsh::model::mesh::generate(2);
-  std::vector<int> types;
-  std::vector<std::vector<std::size_t>> tags, nodes;
-  gmsh::model::mesh::getElements(types, tags, nodes, 2);
-  std::size_t count = 0;
-  for (const auto& t : tags) {
-    count += t.size();
-  }
-  gmsh::finalize();
+  const std::size_t count = gmsh_element_count(geo, 2, spacing);
   EXPECT_EQ(body.cloud.count(), count);
 #endif
 }

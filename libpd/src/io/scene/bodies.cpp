@@ -1,6 +1,7 @@
 // The `bodies` list: regions of the lattice or particle files, each made of one material.
 #include "bind.hpp"
 #include "libpd/core/memory.hpp"
+#include "libpd/core/plugin.hpp"
 #include "libpd/discretisation/graded_set.hpp"
 #include "libpd/io/mesh_file.hpp"
 #include "libpd/io/particle_file.hpp"
@@ -196,6 +197,9 @@ void read_mesh_body(Reader& r, const Fields& f, const ModelSpec& model, BodySpec
     r.fail(e->at(), error.what(),
            mesh_files_supported() ? "fix the mesh or the geometry (docs/scenes.md, meshes)"
                                   : "build libpd with Gmsh (Debian: libgmsh-dev)");
+  } catch (const PluginError& error) {
+    r.fail(e->at(), error.what(),
+           "install libpd's plug-ins with it, or name their folder in LIBPD_PLUGIN_DIR");
   }
   for (const std::string& w : mesh.warnings) {
     r.warn(e->at(), w);
