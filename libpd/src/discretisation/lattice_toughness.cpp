@@ -59,7 +59,7 @@ namespace {
 constexpr double half_width_in_horizons = 10;
 /// The factor is the largest multiplier over the tip's third to sixth lattice periods: from the
 /// second on the breaks repeat with a period of one or two cells (a zig-zag between two rows),
-/// which four periods cover. The first period needs 0.5–3 % less with the weightings here: the
+/// which four periods cover. The first period needs 0.4–3 % less with the weightings here: the
 /// pre-crack keeps the bonds that reach past its front (bond_cuts.cpp), as the grown crack does;
 /// cutting them too made it 4–13 % less.
 constexpr int periods = 6;

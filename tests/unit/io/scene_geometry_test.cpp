@@ -149,12 +149,17 @@ bodies:
   }
 }
 
-TEST(SceneGeometry, CrackCutsTheBondsThatCrossIt) {
-  const pd::Scene s = pd::parse_scene(plate(R"(cracks:
+/// The plate with a crack along y = 0.05 from x = 0.05 to 0.15 (between particle rows).
+pd::Scene cracked_plate() {
+  return pd::parse_scene(plate(R"(cracks:
   - name: c
     segment: [[0.05, 0.05], [0.15, 0.05]]
 )") + solver,
-                                      "s.yaml");
+                         "s.yaml");
+}
+
+TEST(SceneGeometry, CrackCutsTheBondsThatCrossIt) {
+  const pd::Scene s = cracked_plate();
   ASSERT_EQ(s.model.cracks.size(), 1u);
   // The bare model: with ghosts and gradient weights, bonds of zero weight leave the family
   // whether a crack crosses them or not, and the count below would not add up.
@@ -174,11 +179,7 @@ TEST(SceneGeometry, CrackCutsTheBondsThatCrossIt) {
 // grown by breaking bonds leaves it; cutting it too made the pre-crack sharper than a grown crack
 // (its first bonds broke 4–13 % below the running crack's K) and its faces too compliant.
 TEST(SceneGeometry, CrackKeepsTheBondsThatReachPastItsFront) {
-  const pd::Scene s = pd::parse_scene(plate(R"(cracks:
-  - name: c
-    segment: [[0.05, 0.05], [0.15, 0.05]]
-)") + solver,
-                                      "s.yaml");
+  const pd::Scene s = cracked_plate();
   pd::ModelSpec spec = s.model;
   spec.surface_correction = pd::SurfaceCorrection::none;
   spec.volume_correction = pd::VolumeCorrection::none;
@@ -212,11 +213,7 @@ TEST(SceneGeometry, CrackKeepsTheBondsThatReachPastItsFront) {
 
 // Issue 38, item 11: a crack outside every body was accepted without a word (it cuts nothing).
 TEST(SceneGeometry, CrackOutsideEveryBodyIsAWarning) {
-  const pd::Scene inside = pd::parse_scene(plate(R"(cracks:
-  - name: c
-    segment: [[0.05, 0.05], [0.15, 0.05]]
-)") + solver,
-                                           "s.yaml");
+  const pd::Scene inside = cracked_plate();
   EXPECT_TRUE(inside.warnings.empty()) << inside.warnings.front();
   const pd::Scene outside = pd::parse_scene(plate(R"(cracks:
   - name: c
