@@ -17,10 +17,6 @@ namespace pd::verification {
 
 namespace {
 
-/// Where a probe's own value is small, the gate judges its difference against this fraction of
-/// the largest value of the same quantity among the scene's probes.
-constexpr double probe_floor_fraction = 0.1;
-
 std::filesystem::path default_pd_fem() {
   if (const char* env = std::getenv("PD_FEM"); env != nullptr && *env != '\0') {
     return env;
@@ -38,37 +34,9 @@ std::string quoted(const std::string& s) {
   return out + "'";
 }
 
-/// Runs pd-fem on the scene into `dir`; returns its fe.json.
-YAML::Node run_fe(const std::filesystem::path& scene, const std::filesystem::path& dir,
-                  const SceneVerifyOptions& o) {
-  const auto exe = o.pd_fem.empty() ? default_pd_fem() : o.pd_fem;
-  if (!std::filesystem::exists(exe)) {
-    throw std::runtime_error(
-        fmt::format("no FE reference: {} does not exist (libpd was built without deal.II, "
-                    "LIBPD_WITH_FEM_REFERENCE=OFF; or set PD_FEM to the pd-fem executable)",
-                    exe.string()));
-  }
-  std::string command = fmt::format("{} --scene {} -o {}", quoted(exe.string()),
-                                    quoted(scene.string()), quoted(dir.string()));
-  if (o.fe_levels) {
-    command += fmt::format(" --levels {}", *o.fe_levels);
-  }
-  if (o.fe_coarse) {
-    command += " --coarse";
-  }
-  const int status = std::system(command.c_str());
-  if (status != 0) {
-    throw std::runtime_error(fmt::format("pd-fem failed (exit status {}): {}",
-                                         WIFEXITED(status) ? WEXITSTATUS(status) : status,
-                                         command));
-  }
-  const auto file = dir / "fe.json";
-  try {
-    return YAML::LoadFile(file.string());
-  } catch (const YAML::Exception& e) {
-    throw std::runtime_error("cannot read " + file.string() + ": " + e.msg);
-  }
-}
+/// Where a probe's own value is small, the gate judges its difference against this fraction of
+/// the largest value of the same quantity among the scene's probes.
+constexpr double probe_floor_fraction = 0.1;
 
 /// Bond-based PD represents one ν per setting (material.hpp); a scene that gives another one
 /// would be verified against an FE solution of a different material, so it is refused.
@@ -158,6 +126,37 @@ void describe_sides(const Scene& scene, const YAML::Node& fe, Json& out) {
 
 } // namespace
 
+YAML::Node run_pd_fem(const std::filesystem::path& scene, const std::filesystem::path& dir,
+                      const SceneVerifyOptions& o) {
+  const auto exe = o.pd_fem.empty() ? default_pd_fem() : o.pd_fem;
+  if (!std::filesystem::exists(exe)) {
+    throw std::runtime_error(
+        fmt::format("no FE reference: {} does not exist (libpd was built without deal.II, "
+                    "LIBPD_WITH_FEM_REFERENCE=OFF; or set PD_FEM to the pd-fem executable)",
+                    exe.string()));
+  }
+  std::string command = fmt::format("{} --scene {} -o {}", quoted(exe.string()),
+                                    quoted(scene.string()), quoted(dir.string()));
+  if (o.fe_levels) {
+    command += fmt::format(" --levels {}", *o.fe_levels);
+  }
+  if (o.fe_coarse) {
+    command += " --coarse";
+  }
+  const int status = std::system(command.c_str());
+  if (status != 0) {
+    throw std::runtime_error(fmt::format("pd-fem failed (exit status {}): {}",
+                                         WIFEXITED(status) ? WEXITSTATUS(status) : status,
+                                         command));
+  }
+  const auto file = dir / "fe.json";
+  try {
+    return YAML::LoadFile(file.string());
+  } catch (const YAML::Exception& e) {
+    throw std::runtime_error("cannot read " + file.string() + ": " + e.msg);
+  }
+}
+
 Json verify_scene(const std::filesystem::path& scene_path, const Context& ctx,
                   const SceneVerifyOptions& options) {
   const Scene scene = load_scene(scene_path.string());
@@ -174,7 +173,7 @@ Json verify_scene(const std::filesystem::path& scene_path, const Context& ctx,
     throw std::runtime_error("the PD run became unstable: " + pd.result.message);
   }
   const auto t0 = std::chrono::steady_clock::now();
-  const YAML::Node fe = run_fe(std::filesystem::absolute(scene_path), dir / "fe", options);
+  const YAML::Node fe = run_pd_fem(std::filesystem::absolute(scene_path), dir / "fe", options);
   const double fe_wall =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 

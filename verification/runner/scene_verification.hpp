@@ -8,6 +8,7 @@
 
 #include <filesystem>
 #include <optional>
+#include <yaml-cpp/yaml.h>
 
 namespace pd::verification {
 
@@ -19,6 +20,10 @@ struct SceneVerifyOptions {
   std::optional<double> gate;
   std::filesystem::path pd_fem; ///< the pd-fem executable; empty: beside this program, or $PD_FEM
 };
+
+/// Runs pd-fem on the scene file into `dir` (with the options' levels); returns its fe.json.
+YAML::Node run_pd_fem(const std::filesystem::path& scene, const std::filesystem::path& dir,
+                      const SceneVerifyOptions& options);
 
 /// Run the scene and its FE reference; the JSON has one row per probe (PD, FE, the FE's own error
 /// estimate, the difference and, with a gate, the probe's tolerance), the materials both solved
