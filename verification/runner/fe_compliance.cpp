@@ -2,6 +2,7 @@
 
 #include "scene_verification.hpp"
 
+#include <array>
 #include <cmath>
 #include <fmt/format.h>
 #include <fstream>
@@ -19,10 +20,12 @@ constexpr int fe_levels = 2;
 /// difference (its error is second order), large against the FE's coarse mesh size.
 constexpr double step_fraction = 0.1;
 
-/// The elastic problem of the scene with the crack's ends moved outwards by `h` (inwards when
-/// negative): damage, stopping rules and output removed, the one probe kept.
+/// The elastic problem of the scene with the crack's tips (ends inside the body, `tip`) moved
+/// outwards by `h` (inwards when negative): damage, stopping rules and output removed, the one
+/// probe kept.
 std::filesystem::path write_elastic_variant(const std::filesystem::path& scene_file,
                                             const std::string& probe, double h,
+                                            const std::array<bool, 2>& tip,
                                             const std::filesystem::path& file) {
   YAML::Node s = YAML::LoadFile(scene_file.string());
   s.remove("effects");
@@ -42,10 +45,14 @@ std::filesystem::path write_elastic_variant(const std::filesystem::path& scene_f
   const double x1 = segment[1][0].as<double>(), y1 = segment[1][1].as<double>();
   const double length = std::hypot(x1 - x0, y1 - y0);
   const double ex = (x1 - x0) / length, ey = (y1 - y0) / length;
-  segment[0][0] = x0 - h * ex;
-  segment[0][1] = y0 - h * ey;
-  segment[1][0] = x1 + h * ex;
-  segment[1][1] = y1 + h * ey;
+  if (tip[0]) {
+    segment[0][0] = x0 - h * ex;
+    segment[0][1] = y0 - h * ey;
+  }
+  if (tip[1]) {
+    segment[1][0] = x1 + h * ex;
+    segment[1][1] = y1 + h * ey;
+  }
   std::filesystem::create_directories(file.parent_path());
   std::ofstream(file) << s << "\n";
   return file;
@@ -71,8 +78,22 @@ ComplianceGriffith griffith_load_from_fe_compliance(const std::filesystem::path&
                              "segment");
   }
   const auto& v = scene.model.cracks[0].vertices;
-  const double half_length = 0.5 * std::hypot(v[1][0] - v[0][0], v[1][1] - v[0][1]);
-  const double h = step_fraction * half_length;
+  // An end is a tip when it lies inside a body; an end on the surface is the crack's mouth.
+  const double inside = -1e-9 * scene.model.lattice.spacing;
+  std::array<bool, 2> tip{false, false};
+  for (std::size_t k = 0; k < 2; ++k) {
+    for (const BodySpec& body : scene.model.bodies) {
+      tip[k] = tip[k] || body.region.contains(v[k], scene.model.dimension.dim, inside);
+    }
+  }
+  const int tips = (tip[0] ? 1 : 0) + (tip[1] ? 1 : 0);
+  if (tips == 0) {
+    throw std::runtime_error("griffith_load_from_fe_compliance: neither end of the crack lies "
+                             "inside a body");
+  }
+  // The length one tip would have if the crack grew from the surface or from its middle.
+  const double tip_length = std::hypot(v[1][0] - v[0][0], v[1][1] - v[0][1]) / tips;
+  const double h = step_fraction * tip_length;
   const Material& m = scene.model.materials.at(0);
   const double g0 = m.fracture_energy.value_or(0);
   const double thickness = scene.model.dimension.thickness;
@@ -80,14 +101,16 @@ ComplianceGriffith griffith_load_from_fe_compliance(const std::filesystem::path&
   options.fe_levels = fe_levels;
   std::vector<std::vector<double>> loads; // at a − h, a, a + h
   for (const auto& [name, step] : {std::pair{"shorter", -h}, {"as-given", 0.0}, {"longer", h}}) {
-    const auto file = write_elastic_variant(scene_file, probe, step, dir / name / "scene.yaml");
+    const auto file =
+        write_elastic_variant(scene_file, probe, step, tip, dir / name / "scene.yaml");
     loads.push_back(probe_levels(run_pd_fem(file, dir / name, options), probe));
   }
   ComplianceGriffith out;
   out.crack_step = h;
+  std::vector<double> openings, compliances;
   for (std::size_t level = 0; level < loads[1].size(); ++level) {
-    // Both tips move, so the area changes by 2 · 2h · t between the shorter and longer crack.
-    const double dp_da = (loads[2][level] - loads[0][level]) / (4 * h * thickness);
+    // Each tip moves by 2h between the shorter and the longer crack.
+    const double dp_da = (loads[2][level] - loads[0][level]) / (tips * 2 * h * thickness);
     const double g = -0.5 * grip_opening * dp_da;
     if (!(g > 0)) {
       throw std::runtime_error(fmt::format("FE compliance: the crack's energy release rate is {} "
@@ -95,11 +118,18 @@ ComplianceGriffith griffith_load_from_fe_compliance(const std::filesystem::path&
                                            g));
     }
     out.level_loads.push_back(loads[1][level] * std::sqrt(g0 / g));
+    openings.push_back(grip_opening * std::sqrt(g0 / g));
+    compliances.push_back(grip_opening / loads[1][level]);
     out.energy_release_rate = g;
   }
-  const auto n = out.level_loads.size();
-  out.failure_load =
-      n < 2 ? out.level_loads.back() : 2 * out.level_loads[n - 1] - out.level_loads[n - 2];
+  // pd-fem halves the mesh size from level to level.
+  const auto extrapolated = [](const std::vector<double>& levels) {
+    const auto n = levels.size();
+    return n < 2 ? levels.back() : 2 * levels[n - 1] - levels[n - 2];
+  };
+  out.failure_load = extrapolated(out.level_loads);
+  out.opening_at_failure = extrapolated(openings);
+  out.compliance = extrapolated(compliances);
   return out;
 }
 

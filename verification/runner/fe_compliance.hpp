@@ -21,11 +21,14 @@ struct ComplianceGriffith {
   std::vector<double> level_loads; ///< the same on each FE level, coarse to fine
   double crack_step = 0;           ///< h: each tip moved by ±h
   double energy_release_rate = 0;  ///< G at the scene's own grip opening, finest level
+  double opening_at_failure = 0;   ///< the grips' opening at the failure load (extrapolated)
+  double compliance = 0; ///< grips' opening / probe value with the crack as given (extrapolated)
 };
 
-/// `scene_file` holds a crack (the scene's first) whose two ends both lie inside the body, pulled
-/// by supports whose displacements open it by `grip_opening` and read by the reaction probe
-/// `probe`. Runs pd-fem three times (crack as given, each tip moved out and in by h = a/10) on
+/// `scene_file` holds a crack (the scene's first, a segment) with one or two tips (ends inside a
+/// body; an end on the surface is its mouth), opened by supports whose displacements differ by
+/// `grip_opening` and read by the reaction probe `probe`. Runs pd-fem three times (crack as
+/// given, each tip moved out and in by h, a tenth of the crack's length per tip) on
 /// two mesh levels into `dir` and extrapolates the load to zero mesh size with order 1, the rate
 /// at which the energy of a crack-tip field (u ~ √r) converges under uniform refinement.
 ComplianceGriffith griffith_load_from_fe_compliance(const std::filesystem::path& scene_file,
