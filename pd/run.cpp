@@ -163,19 +163,19 @@ Command add_run_command(CLI::App& app) {
   cmd->add_option("--restart", a->restart,
                   "continue from a checkpoint of the same scene; the result is bitwise that of an "
                   "uninterrupted run (under mpirun: the name given to --checkpoint, or "
-                  "OUTDIR/checkpoint.pdcp; each rank reads its own piece)")
+                  "OUTDIR/checkpoint.pdcp; a set written on any number of ranks is read)")
       ->check(CLI::Validator(
           [](const std::string& path) {
-            const auto mine = rank_file(path, world_communicator());
-            // Only that it exists: what kind of file it is, the checkpoint reader says.
-            std::error_code ec; // e.g. a name too long: said, not thrown out of the parser
-            // A set a killed rank left half-replaced may hold only the next piece.
-            if (std::filesystem::exists(mine, ec) ||
-                std::filesystem::exists(next_piece(mine), ec)) {
+            // Only that a set is there: which one, and what kind of file, the library says
+            // (checkpoint_set_ranks, the checkpoint reader). Not collective: every rank sees
+            // the same folder, so all accept or all refuse.
+            if (!checkpoint_sets_on_disk(path).empty()) {
               return std::string{};
             }
-            return ec ? mine.string() + ": " + ec.message()
-                      : "File does not exist: " + mine.string();
+            const std::filesystem::path base(path);
+            return "File does not exist: " + path + " (nor the pieces " + base.stem().string() +
+                   "-rRRRRofNNNN" + base.extension().string() +
+                   " of a set written on several ranks)";
           },
           "FILE"));
   return {cmd, [a] { return run(*a); }, true};

@@ -262,8 +262,8 @@ TEST_F(DamagedCheckpoint, FlippedByteIsRefused) {
   foreign[0] = 'X';
   EXPECT_NE(restart_with(foreign).find("is not a libpd checkpoint"), std::string::npos);
   std::string newer = good_;
-  newer[8] = static_cast<char>(newer[8] + 1); // format version 2
-  EXPECT_NE(restart_with(newer).find("has format version 2; this pd reads version 1"),
+  newer[8] = static_cast<char>(newer[8] + 1); // format version 3
+  EXPECT_NE(restart_with(newer).find("has format version 3; this pd reads version 2"),
             std::string::npos);
 }
 

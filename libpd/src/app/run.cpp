@@ -337,24 +337,12 @@ private:
     if (options_.restart.empty()) {
       return;
     }
-    recover_checkpoint_set(options_.restart, comm()); // a set a killed rank left half-replaced
-    const std::filesystem::path mine = rank_file(options_.restart, comm());
-    std::error_code ec;
-    if (comm().size() > 1 && !std::filesystem::exists(mine, ec)) {
-      throw CheckpointError(fmt::format(
-          "no checkpoint piece {} for rank {} of {}: a run split over ranks restarts from the "
-          "pieces written with the same rank count",
-          mine.string(), comm().rank(), comm().size()));
-    }
-    CheckpointPolicy::restore(mine, fingerprint(), probes_.size(), *sim_, out_.history,
-                              output_->frames());
-    // Every rank's piece must be of the same step (a run killed while the pieces were being
-    // written leaves a mixed set, which must not continue).
-    const auto step = static_cast<double>(sim_->state().step);
-    if (comm().min(step) != comm().max(step)) {
-      throw CheckpointError("the checkpoint pieces are of different steps (the run was stopped "
-                            "while writing them); restart from an earlier set");
-    }
+    const int writers = checkpoint_set_ranks(options_.restart, comm());
+    recover_checkpoint_set(options_.restart, writers, comm()); // a set a killed rank left
+    // Every piece is read by every rank: values are keyed by global particle index, so the set
+    // may come from any number of ranks, and pieces of different steps are refused.
+    CheckpointPolicy::restore(checkpoint_set(options_.restart, writers), fingerprint(),
+                              probes_.size(), *sim_, out_.history, output_->frames());
     out_.restarted_from_step = sim_->state().step;
     evaluations_restored_ = sim_->integrator().force_evaluations();
   }

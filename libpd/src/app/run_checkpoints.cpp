@@ -4,8 +4,11 @@
 
 #include "libpd/core/atomic_file.hpp"
 
+#include <cctype>
+#include <cstdio>
 #include <fmt/format.h>
 #include <functional>
+#include <set>
 #include <unistd.h>
 
 namespace pd {
@@ -16,38 +19,79 @@ std::string hex(std::uint64_t v) {
   return fmt::format("{:016x}", v);
 }
 
+/// The whole model's particle counts, on any rank.
+std::size_t global_particles(const Model& m) {
+  return m.ownership.partial() ? m.ownership.global_particles : m.size();
+}
+std::size_t global_body_particles(const Model& m) {
+  return m.ownership.partial() ? m.ownership.global_body_particles : m.size() - m.ghost_count;
+}
+
 /// Everything build_model derived from the scene that the forces, the integrator and the
-/// constraints read; two runs with equal hashes integrate the same equations.
+/// constraints read; two runs with equal hashes integrate the same equations. The same on any
+/// number of ranks: each owned particle's own data (keyed by its global index, its bond row by
+/// the neighbours' global indices) is hashed alone and the hashes are added, an order-free sum.
 std::uint64_t model_hash(const Model& m) {
+  const Ownership& own = m.ownership;
+  const auto global = [&](std::uint32_t i) { return own.global(i); };
+  std::uint64_t sum = 0;
+  for (std::size_t i = 0; i < m.size(); ++i) {
+    if (!own.owns(i)) {
+      continue;
+    }
+    Fnv1a h;
+    h.add_value(global(static_cast<std::uint32_t>(i)));
+    h.add_value(m.particles.position[i]);
+    h.add_value(m.particles.volume[i]);
+    h.add_value(m.particles.material[i]);
+    h.add_value(m.density[i]);
+    for (std::size_t k = m.family.offsets[i]; k < m.family.offsets[i + 1]; ++k) {
+      h.add_value(global(m.family.neighbour[k]));
+      h.add_value(m.family.inverse_length[k]);
+      for (const std::vector<double>* per_bond :
+           {&m.field.bond_stiffness, &m.field.bond_critical_stretch, &m.field.bond_yield_stretch}) {
+        if (!per_bond->empty()) {
+          h.add_value((*per_bond)[k]);
+        }
+      }
+    }
+    if (!m.external_force_density.empty()) {
+      for (std::size_t c = 0; c < 3; ++c) {
+        h.add_value(m.external_force_density[3 * i + c]);
+      }
+    }
+    sum += h.value();
+  }
+  for (const Constraint& c : m.constraints) { // field by field: the struct has padding
+    if (own.owns(c.particle)) {
+      Fnv1a h;
+      h.add_value(global(c.particle));
+      h.add_value(c.component);
+      h.add_value(c.value);
+      h.add_value(c.mirror_of == Constraint::no_mirror ? c.mirror_of : global(c.mirror_of));
+      h.add_value(c.mirror_sign);
+      sum += h.value();
+    }
+  }
+  const ExtrapolatedParticles& e = m.extrapolated;
+  for (std::size_t d = 0; d < e.particle.size(); ++d) {
+    if (own.owns(e.particle[d])) {
+      Fnv1a h;
+      h.add_value(global(e.particle[d]));
+      for (std::size_t t = e.offsets[d]; t < e.offsets[d + 1]; ++t) {
+        h.add_value(global(e.source[t]));
+        h.add_value(e.coefficient[t]);
+        h.add_value(e.negated.empty() ? std::uint8_t{0} : e.negated[t]); // empty: none negated
+      }
+      sum += h.value();
+    }
+  }
   Fnv1a h;
-  h.add_vector(m.particles.position);
-  h.add_vector(m.particles.volume);
-  h.add_vector(m.particles.material);
-  h.add_vector(m.density);
-  h.add_vector(m.family.offsets);
-  h.add_vector(m.family.neighbour);
-  h.add_vector(m.family.inverse_length);
+  h.add_value(own.communicator().sum(sum));
   h.add_value(m.field.stiffness);
   h.add_value(m.field.critical_stretch);
   h.add_value(m.field.yield_stretch);
-  h.add_vector(m.field.bond_stiffness);
-  h.add_vector(m.field.bond_critical_stretch);
-  h.add_vector(m.field.bond_yield_stretch);
-  h.add_value(static_cast<std::uint64_t>(m.constraints.size()));
-  for (const Constraint& c : m.constraints) { // field by field: the struct has padding
-    h.add_value(c.particle);
-    h.add_value(c.component);
-    h.add_value(c.value);
-    h.add_value(c.mirror_of);
-    h.add_value(c.mirror_sign);
-  }
-  h.add_value(static_cast<std::uint64_t>(m.ghost_count));
-  h.add_vector(m.extrapolated.particle);
-  h.add_vector(m.extrapolated.offsets);
-  h.add_vector(m.extrapolated.source);
-  h.add_vector(m.extrapolated.coefficient);
-  h.add_vector(m.extrapolated.negated);
-  h.add_vector(m.external_force_density);
+  h.add_value(static_cast<std::uint64_t>(global_particles(m) - global_body_particles(m)));
   return h.value();
 }
 
@@ -119,8 +163,13 @@ CheckpointFingerprint run_fingerprint(const Scene& scene, const Simulation& sim,
   CheckpointFingerprint f;
   f.scene = scene.path.empty() ? scene.title : scene.path;
   f.add("dimension", std::to_string(m.spec.dimension.dim));
-  f.add("particles", std::to_string(m.size()));
-  f.add("bonds", std::to_string(m.family.bond_count()));
+  const Ownership& own = m.ownership;
+  std::uint64_t directed = 0;
+  for (std::size_t i = 0; i < m.size(); ++i) {
+    directed += own.owns(i) ? m.family.family_size(i) : 0;
+  }
+  f.add("particles", std::to_string(global_particles(m)));
+  f.add("bonds", std::to_string(own.communicator().sum(directed) / 2));
   f.add("integrator", sim.integrator().name());
   if (scene.solver.integrator == IntegratorKind::arkode) {
     const ArkodeSpec& a = scene.solver.arkode;
@@ -142,7 +191,14 @@ CheckpointFingerprint run_fingerprint(const Scene& scene, const Simulation& sim,
   for (const auto& p : probes) {
     names += (names.empty() ? "" : ",") + p.name;
     ph.add_value(p.component);
-    ph.add_vector(p.particles);
+    std::uint64_t particles = 0; // by global index, order-free: the same on any rank count
+    for (std::size_t k = 0; k < p.particles.size(); ++k) {
+      Fnv1a one;
+      one.add_value(own.global(p.particles[k]));
+      one.add_value(p.role.empty() ? std::uint8_t{0} : p.role[k]);
+      particles += one.value();
+    }
+    ph.add_value(own.communicator().sum(particles));
   }
   f.add("probes", names + " #" + hex(ph.value()));
   f.add("history_every", std::to_string(scene.output.history_every));
@@ -188,19 +244,86 @@ void remove_durably(const std::filesystem::path& file) {
 
 } // namespace
 
-void recover_checkpoint_set(const std::filesystem::path& base, const Communicator& comm) {
-  if (comm.size() == 1) {
+std::set<int> checkpoint_sets_on_disk(const std::filesystem::path& base) {
+  // Pieces are NAME-rRRRRofNNNN.EXT (rank_file), or their next pieces while a set is replaced.
+  const std::string stem = base.stem().string() + "-r";
+  const std::string ext = base.extension().string();
+  std::set<int> counts;
+  std::error_code ec;
+  if (std::filesystem::is_regular_file(base, ec)) {
+    counts.insert(1);
+  }
+  const std::filesystem::path folder =
+      base.parent_path().empty() ? std::filesystem::path(".") : base.parent_path();
+  for (const auto& entry : std::filesystem::directory_iterator(folder, ec)) {
+    std::string name = entry.path().filename().string();
+    if (name.ends_with(".next")) {
+      name.resize(name.size() - 5);
+    }
+    int rank = 0, ranks = 0;
+    char of[3] = {};
+    if (name.starts_with(stem) && name.ends_with(ext) &&
+        name.size() == stem.size() + 4 + 2 + 4 + ext.size() &&
+        std::sscanf(name.c_str() + stem.size(), "%4d%2c%4d", &rank, of, &ranks) == 3 &&
+        std::string_view(of, 2) == "of" && ranks > 1 && rank < ranks) {
+      counts.insert(ranks);
+    }
+  }
+  return counts;
+}
+
+int checkpoint_set_ranks(const std::filesystem::path& base, const Communicator& comm) {
+  std::string found;
+  if (comm.root()) {
+    const std::set<int> counts = checkpoint_sets_on_disk(base);
+    if (counts.contains(comm.size()) || counts.empty()) {
+      // This run's own count first, as before sets of other counts could be read; with nothing
+      // there, reading its pieces names the file missing.
+      found = std::to_string(comm.size());
+    } else if (counts.size() == 1) {
+      found = std::to_string(*counts.begin());
+    } else {
+      std::string list;
+      for (const int n : counts) {
+        list += (list.empty() ? "" : ", ") + std::to_string(n);
+      }
+      found = fmt::format("checkpoint sets of {} written on {} ranks lie side by side and none "
+                          "on {}: remove the ones not meant",
+                          base.string(), list, comm.size());
+    }
+  }
+  found = comm.broadcast(found);
+  if (found.empty() || !std::isdigit(static_cast<unsigned char>(found.front()))) {
+    throw CheckpointError(found);
+  }
+  return std::stoi(found);
+}
+
+std::vector<std::filesystem::path> checkpoint_set(const std::filesystem::path& base, int ranks) {
+  std::vector<std::filesystem::path> pieces;
+  for (int r = 0; r < ranks; ++r) {
+    pieces.push_back(rank_file(base, r, ranks));
+  }
+  return pieces;
+}
+
+void recover_checkpoint_set(const std::filesystem::path& base, int ranks,
+                            const Communicator& comm) {
+  if (ranks == 1) {
     return; // one file, replaced atomically
   }
-  const std::filesystem::path mine = rank_file(base, comm);
   std::error_code ec;
   const bool complete = std::filesystem::exists(set_marker(base), ec);
   comm.barrier(); // every rank has seen the marker before it goes
-  if (std::filesystem::exists(next_piece(mine), ec)) {
-    if (complete) {
-      promote(next_piece(mine), mine);
-    } else {
-      remove_durably(next_piece(mine)); // an incomplete newer set: the one in place stands
+  // The set may have been written on another number of ranks: rank r sees to pieces r, r + M, ...
+  for (int piece = comm.rank(); piece < ranks; piece += comm.size()) {
+    const std::filesystem::path p = rank_file(base, piece, ranks);
+    if (std::filesystem::exists(next_piece(p), ec)) {
+      if (complete) {
+        promote(next_piece(p), p);
+      } else {
+        remove_durably(next_piece(p)); // an incomplete newer set: the one in place stands
+      }
     }
   }
   comm.barrier();
@@ -255,11 +378,11 @@ void CheckpointPolicy::save(const CheckpointFingerprint& fingerprint, const Simu
   comm_->barrier(); // no rank starts a newer next piece while the marker still stands
 }
 
-void CheckpointPolicy::restore(const std::filesystem::path& path,
+void CheckpointPolicy::restore(const std::vector<std::filesystem::path>& pieces,
                                const CheckpointFingerprint& fingerprint, std::size_t probe_count,
                                Simulation& sim, ProbeHistory& history,
                                std::vector<VtuFrame>& frames) {
-  CheckpointReader reader = read_checkpoint(path, fingerprint);
+  CheckpointReader reader = read_checkpoint_set(pieces, fingerprint);
   sim.restore(reader);
   restore_history(reader, probe_count, history, frames);
 }

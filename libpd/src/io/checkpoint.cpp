@@ -187,8 +187,9 @@ CheckpointFingerprint read_checkpoint_fingerprint(const std::filesystem::path& p
   return parse(path).fingerprint;
 }
 
-CheckpointReader read_checkpoint(const std::filesystem::path& path,
-                                 const CheckpointFingerprint& expected) {
+namespace {
+
+Parsed parse_and_compare(const std::filesystem::path& path, const CheckpointFingerprint& expected) {
   Parsed p = parse(path);
   std::vector<std::string> differences;
   for (const auto& [key, value] : expected.items) {
@@ -221,7 +222,24 @@ CheckpointReader read_checkpoint(const std::filesystem::path& path,
                              expected.scene, get(expected, "particles"), get(expected, "bonds"),
                              get(expected, "integrator"), list));
   }
+  return p;
+}
+
+} // namespace
+
+CheckpointReader read_checkpoint(const std::filesystem::path& path,
+                                 const CheckpointFingerprint& expected) {
+  Parsed p = parse_and_compare(path, expected);
   return CheckpointReader(std::move(p.payload), path.string());
+}
+
+CheckpointReader read_checkpoint_set(const std::vector<std::filesystem::path>& pieces,
+                                     const CheckpointFingerprint& expected) {
+  std::vector<CheckpointReader::Piece> read;
+  for (const std::filesystem::path& path : pieces) {
+    read.push_back({parse_and_compare(path, expected).payload, path.string(), 0});
+  }
+  return CheckpointReader(std::move(read));
 }
 
 } // namespace pd

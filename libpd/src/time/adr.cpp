@@ -189,14 +189,14 @@ protected:
   void save_state(CheckpointWriter& w) const override {
     w.boolean(started_);
     w.f64(last_damping_);
-    w.doubles(velocity_);
-    w.doubles(previous_);
+    w.per_particle(velocity_, 3);
+    w.per_particle(previous_, 3);
   }
   void restore_state(CheckpointReader& r) override {
     started_ = r.boolean();
     last_damping_ = r.f64();
-    velocity_ = r.doubles(velocity_.size(), "ADR velocity");
-    previous_ = r.doubles(previous_.size(), "ADR previous force");
+    velocity_ = r.per_particle(velocity_.size(), 3, "ADR velocity");
+    previous_ = r.per_particle(previous_.size(), 3, "ADR previous force");
   }
 
 private:

@@ -290,7 +290,7 @@ protected:
     }
     w.f64(time_);
     w.u64(internal_steps_);
-    w.doubles(buffer_);
+    w.per_particle(buffer_, 3); // [u; v]: two blocks of three values per particle
   }
 
   void restore_state(CheckpointReader& r) override {
@@ -300,7 +300,7 @@ protected:
     time_ = r.f64();
     internal_steps_ = r.u64();
     steps_before_ = internal_steps_;
-    const std::vector<double> saved = r.doubles(buffer_.size(), "ARKode state [u; v]");
+    const std::vector<double> saved = r.per_particle(buffer_.size(), 3, "ARKode state [u; v]");
     std::copy(saved.begin(), saved.end(), buffer_.begin()); // y_ wraps buffer_'s storage
     if (memory_ != nullptr) {
       ERKStepFree(&memory_); // the next step starts a fresh ERKStep from the restored [u; v]

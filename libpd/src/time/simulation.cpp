@@ -175,23 +175,41 @@ double Simulation::steady_force_tolerance() const {
   return force_tolerance_for(full_load_norm(model_));
 }
 
+namespace {
+
+/// The model's particles and bond rows as a checkpoint keys them (global index, owner, row).
+CheckpointLayout checkpoint_layout(const Model& m) {
+  CheckpointLayout l;
+  l.particles = m.size();
+  l.global = m.ownership.global_index;
+  l.owned = m.ownership.owned;
+  l.rows = m.family.offsets;
+  return l;
+}
+
+} // namespace
+
 void Simulation::save(CheckpointWriter& w) const {
+  const Communicator& comm = model_.ownership.communicator();
+  w.keys(checkpoint_layout(model_), static_cast<std::uint64_t>(comm.rank()),
+         static_cast<std::uint64_t>(comm.size()));
   w.section("STAT");
   w.f64(state_.time);
   w.u64(state_.step);
   w.u64(run_origin_);
   w.f64(dt_);
-  w.doubles(state_.position);
-  w.doubles(state_.velocity);
-  w.doubles(state_.force);
+  w.per_particle(state_.position, 3);
+  w.per_particle(state_.velocity, 3);
+  w.per_particle(state_.force, 3);
   w.section("BOND");
-  w.bytes(model_.state.broken);
-  w.doubles(model_.state.plastic_stretch);
-  w.doubles(model_.state.damage);
+  w.per_bond(model_.state.broken);
+  w.per_bond(model_.state.plastic_stretch);
+  w.per_particle(model_.state.damage, 1);
   integrator_->save(w);
 }
 
 void Simulation::restore(CheckpointReader& r) {
+  r.keys(checkpoint_layout(model_));
   r.section("STAT");
   State st;
   st.time = r.f64();
@@ -202,13 +220,13 @@ void Simulation::restore(CheckpointReader& r) {
     r.fail(fmt::format("Δt {} differs from this run's {}", dt, dt_));
   }
   const std::size_t ndof = state_.position.size();
-  st.position = r.doubles(ndof, "positions");
-  st.velocity = r.doubles(ndof, "velocities");
-  st.force = r.doubles(ndof, "forces");
+  st.position = r.per_particle(ndof, 3, "positions");
+  st.velocity = r.per_particle(ndof, 3, "velocities");
+  st.force = r.per_particle(ndof, 3, "forces");
   r.section("BOND");
-  auto broken = r.bytes(model_.state.broken.size(), "broken-bond flags");
-  auto plastic = r.doubles(model_.state.plastic_stretch.size(), "plastic stretches");
-  auto damage = r.doubles(model_.state.damage.size(), "damage indices");
+  auto broken = r.per_bond_bytes(model_.state.broken.size(), "broken-bond flags");
+  auto plastic = r.per_bond(model_.state.plastic_stretch.size(), "plastic stretches");
+  auto damage = r.per_particle(model_.state.damage.size(), 1, "damage indices");
   integrator_->restore(r);
   // Nothing is changed until everything has been read: a bad checkpoint leaves the run as it was
   // (except the integrator, which only restores after its own checks).

@@ -12,6 +12,7 @@
 
 #include <cstddef>
 #include <filesystem>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -28,7 +29,7 @@ CheckpointFingerprint run_fingerprint(const Scene& scene, const Simulation& sim,
 /// if neither is set).
 std::filesystem::path checkpoint_path(const RunOptions& options);
 /// A run split over N > 1 ranks keeps one checkpoint file per rank: NAME-rRRRRofNNNN.EXT beside
-/// the path given (each written atomically; a restart needs the same rank count).
+/// the path given (each written atomically). A restart on any number of ranks reads them all.
 std::filesystem::path rank_file(const std::filesystem::path& path, int rank, int ranks);
 std::filesystem::path rank_file(const std::filesystem::path& path, const Communicator& comm);
 /// The path asked for (RunOptions::checkpoint, or output_dir/checkpoint.pdcp), before any rank
@@ -43,8 +44,21 @@ std::filesystem::path checkpoint_base_path(const RunOptions& options);
 /// it the pieces in place are.
 std::filesystem::path next_piece(const std::filesystem::path& piece);
 std::filesystem::path set_marker(const std::filesystem::path& base);
-/// On every rank of `comm` (collective), before the pieces of `base` are read.
-void recover_checkpoint_set(const std::filesystem::path& base, const Communicator& comm);
+/// On every rank of `comm` (collective), before the pieces of `base` (a set written on `ranks`
+/// ranks, any number) are read.
+void recover_checkpoint_set(const std::filesystem::path& base, int ranks, const Communicator& comm);
+
+/// The rank counts of the checkpoint sets of `base` on disk (1: the single file `base`; N > 1: a
+/// set of pieces NAME-rRRRRofNNNN.EXT, or their next pieces while one is replaced). Not
+/// collective: what a check before the run may ask.
+std::set<int> checkpoint_sets_on_disk(const std::filesystem::path& base);
+
+/// The number of ranks that wrote the checkpoint set of `base` found on disk (collective; 1: the
+/// single file `base`): this run's own rank count if a set of it is there, else the one set
+/// there is. None, or several of other counts, is refused (CheckpointError).
+int checkpoint_set_ranks(const std::filesystem::path& base, const Communicator& comm);
+/// The files of the set of `base` written on `ranks` ranks, in rank order.
+std::vector<std::filesystem::path> checkpoint_set(const std::filesystem::path& base, int ranks);
 
 class CheckpointPolicy {
 public:
@@ -67,11 +81,12 @@ public:
   /// Write the simulation's state with the run's record so far.
   void save(const CheckpointFingerprint& fingerprint, const Simulation& sim,
             const ProbeHistory& history, const std::vector<VtuFrame>& frames) const;
-  /// Read `path` (which must match `fingerprint`) into the simulation and the run's record
-  /// (a history of `probe_count` columns).
-  static void restore(const std::filesystem::path& path, const CheckpointFingerprint& fingerprint,
-                      std::size_t probe_count, Simulation& sim, ProbeHistory& history,
-                      std::vector<VtuFrame>& frames);
+  /// Read the set `pieces` (each must match `fingerprint`) into the simulation and the run's
+  /// record (a history of `probe_count` columns): each process takes the values of its particles
+  /// from the pieces that own them, whatever number of ranks wrote the set.
+  static void restore(const std::vector<std::filesystem::path>& pieces,
+                      const CheckpointFingerprint& fingerprint, std::size_t probe_count,
+                      Simulation& sim, ProbeHistory& history, std::vector<VtuFrame>& frames);
 
 private:
   const Communicator* comm_;

@@ -6,7 +6,9 @@
 //
 //   magic "LIBPDCKP" (8 bytes) · format version u32 · byte-order marker u32
 //   fingerprint length u64 · fingerprint (count u32, then key/value strings)
-//   payload length u64 · payload (tagged sections written by Simulation, Integrator and run_scene)
+//   payload length u64 · payload (tagged sections written by Simulation, Integrator and run_scene;
+//   per-particle and per-bond values are those of the particles the writing rank owns, keyed by
+//   global index in the KEYS section, so a set restarts on any number of ranks)
 //   FNV-1a-64 checksum u64 of every byte before it
 //
 // The fingerprint names what makes the run (particles, bonds, Δt, integrator, a hash of the model's
@@ -55,6 +57,11 @@ bool is_checkpoint_file(const std::filesystem::path& path);
 /// Throws CheckpointError with a one-line reason otherwise.
 CheckpointReader read_checkpoint(const std::filesystem::path& path,
                                  const CheckpointFingerprint& expected);
+
+/// The pieces of a set written by a run split over ranks, each checked as read_checkpoint does;
+/// the reader assembles this process's values from them (CheckpointReader::keys).
+CheckpointReader read_checkpoint_set(const std::vector<std::filesystem::path>& pieces,
+                                     const CheckpointFingerprint& expected);
 
 /// Only the fingerprint of a checkpoint (after the integrity checks), e.g. to print it.
 CheckpointFingerprint read_checkpoint_fingerprint(const std::filesystem::path& path);
