@@ -1,5 +1,7 @@
 #include "scene_mesh.h"
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <deal.II/grid/grid_generator.h>
 #include <deal.II/grid/grid_in.h>
@@ -7,7 +9,9 @@
 #include <fstream>
 #include <gmsh.h>
 #include <limits>
+#include <map>
 #include <set>
+#include <sstream>
 #include <stdexcept>
 
 namespace pdfem {
@@ -262,6 +266,107 @@ void split_cracks(const std::pair<int, int> groups) {
     remove.emplace_back(0, groups.second);
   gmsh::model::removePhysicalGroups(remove);
 }
+
+// Why: Gmsh's Crack plugin (4.8) duplicates the nodes of a crack but may leave cells of both
+// sides on one copy where thin cells meet the crack's mouth (measured on the DCB scene: one copy
+// of the mouth node in 1 cell, the other in 5 cells of both arms), so the arms stay joined at a
+// node and the FE solves a closed crack. Each cell that touches a node with two copies gets the
+// copy of its own side of the crack line (the side its centroid lies on), in the .msh text before
+// deal.II reads it (Gmsh 4.8's API cannot change a cell's nodes).
+void give_crack_sides_their_own_nodes(const SceneProblem& p, const std::filesystem::path& msh) {
+  std::ifstream in(msh);
+  std::vector<std::string> lines;
+  for (std::string line; std::getline(in, line);)
+    lines.push_back(line);
+  const auto section = [&](const std::string& name) {
+    const auto at = std::find(lines.begin(), lines.end(), name);
+    if (at == lines.end())
+      throw std::runtime_error(msh.string() + ": no " + name + " section");
+    return static_cast<std::size_t>(at - lines.begin());
+  };
+  // $Nodes (format 4.1): blocks of "dim tag parametric n", n tags, n coordinate lines.
+  std::map<std::size_t, std::array<double, 2>> position;
+  std::size_t k = section("$Nodes") + 1;
+  std::size_t blocks = std::stoul(lines[k++]);
+  for (std::size_t b = 0; b < blocks; ++b) {
+    std::istringstream head(lines[k++]);
+    int entity_dim = 0, entity = 0, parametric = 0;
+    std::size_t n = 0;
+    head >> entity_dim >> entity >> parametric >> n;
+    for (std::size_t i = 0; i < n; ++i) {
+      std::istringstream xyz(lines[k + n + i]);
+      double x = 0., y = 0.;
+      xyz >> x >> y;
+      position[std::stoul(lines[k + i])] = {x, y};
+    }
+    k += 2 * n;
+  }
+  // Nodes on a crack segment, grouped by position: a group of two is a node and its copy.
+  const double tol = 1e-9 * p.spacing;
+  std::map<std::pair<long long, long long>, std::vector<std::size_t>> at_point;
+  std::map<std::size_t, std::size_t> crack_of;
+  for (const auto& [tag, x] : position)
+    for (std::size_t c = 0; c < p.cracks.size(); ++c) {
+      const pd::Vec3 &a = p.cracks[c].vertices.at(0), &b = p.cracks[c].vertices.at(1);
+      const double ex = b[0] - a[0], ey = b[1] - a[1], length2 = ex * ex + ey * ey;
+      const double t = ((x[0] - a[0]) * ex + (x[1] - a[1]) * ey) / length2;
+      const double off = std::abs((x[0] - a[0]) * ey - (x[1] - a[1]) * ex) / std::sqrt(length2);
+      if (off < tol && t > -tol && t < 1. + tol) {
+        at_point[{std::llround(x[0] / tol), std::llround(x[1] / tol)}].push_back(tag);
+        crack_of[tag] = c;
+      }
+    }
+  std::map<std::size_t, std::array<std::size_t, 2>> copies; // either tag -> {one, other}
+  for (const auto& [point, tags] : at_point)
+    if (tags.size() == 2)
+      for (const std::size_t tag : tags)
+        copies[tag] = {tags[0], tags[1]};
+  if (copies.empty())
+    return;
+  // $Elements: blocks of "dim tag type n", then n lines "element node...". Only cells change.
+  k = section("$Elements") + 1;
+  blocks = std::stoul(lines[k++]);
+  for (std::size_t b = 0; b < blocks; ++b) {
+    std::istringstream head(lines[k++]);
+    int entity_dim = 0, entity = 0, type = 0;
+    std::size_t n = 0;
+    head >> entity_dim >> entity >> type >> n;
+    for (std::size_t i = 0; i < n && entity_dim == 2; ++i) {
+      std::istringstream cell(lines[k + i]);
+      std::size_t element = 0;
+      cell >> element;
+      std::vector<std::size_t> nodes;
+      for (std::size_t v; cell >> v;)
+        nodes.push_back(v);
+      double cx = 0., cy = 0.;
+      for (const std::size_t v : nodes) {
+        cx += position.at(v)[0] / static_cast<double>(nodes.size());
+        cy += position.at(v)[1] / static_cast<double>(nodes.size());
+      }
+      bool changed = false;
+      for (std::size_t& v : nodes)
+        if (const auto twin = copies.find(v); twin != copies.end()) {
+          const pd::Crack& c = p.cracks[crack_of.at(v)];
+          const pd::Vec3 &a = c.vertices.at(0), &e = c.vertices.at(1);
+          const bool left = (e[0] - a[0]) * (cy - a[1]) - (e[1] - a[1]) * (cx - a[0]) > 0.;
+          const std::size_t mine = twin->second[left ? 0 : 1];
+          changed = changed || mine != v;
+          v = mine;
+        }
+      if (changed) {
+        std::ostringstream line;
+        line << element;
+        for (const std::size_t v : nodes)
+          line << ' ' << v;
+        lines[k + i] = line.str() + ' ';
+      }
+    }
+    k += n;
+  }
+  std::ofstream out(msh);
+  for (const std::string& line : lines)
+    out << line << '\n';
+}
 } // namespace
 
 double base_cell_size(const SceneProblem& problem, const bool gmsh) {
@@ -357,6 +462,8 @@ void gmsh_mesh(const SceneProblem& problem, const double h0, const unsigned int 
     split_cracks(crack_groups);
     std::filesystem::create_directories(msh_file.parent_path());
     gmsh::write(msh_file.string());
+    if (crack_groups.first != 0)
+      give_crack_sides_their_own_nodes(problem, msh_file);
   } catch (...) {
     gmsh::finalize();
     throw;

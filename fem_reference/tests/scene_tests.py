@@ -29,6 +29,11 @@ CASE
               with sigma = grip force / (W t): between -5 % and +10 % (a square plate whose
               grips hold x: finite width +0.6 %, the grips' lateral restraint, the particles
               0.5 mm off the faces; a closed slit would give ~ -97 %).
+  edge-crack  tests/scenes/edge-crack-dcb.yaml (the DCB case's strip, an edge crack from the left
+              face opened by grips beside its mouth): the crack must open at its mouth, the
+              arms by equal and opposite amounts (within 0.1 %) and the ligament ahead of the
+              tip stay put (below 1 % of the arms' movement); a crack joined at its mouth gave
+              -0.0013 / +0.0009 m and a grip force of 3.6 MN instead of 41 kN.
 Exit 0 on success, 1 with a message naming the failing check.
 """
 import argparse
@@ -224,18 +229,31 @@ def crack(args):
                  f"({100 * (opening / inglis - 1):+.2f} %), sigma {sigma:.4e} Pa")
 
 
+def edge_crack(args):
+    out = args.work / "scene-edge-crack"
+    run([args.pd_fem, "--scene", args.source / "tests/scenes/edge-crack-dcb.yaml", "--levels", "2",
+         "-o", out])
+    fe = fe_json(out / "fe.json")
+    up, down = probe(fe, "upper_arm")["value"], probe(fe, "lower_arm")["value"]
+    ahead = probe(fe, "ahead_of_tip")["value"]
+    force = probe(fe, "force")["value"]
+    return check(up > 0 and abs(up + down) <= 1e-3 * up and abs(ahead) <= 1e-2 * up,
+                 f"edge crack: arms {up:.6e} / {down:.6e} m, ahead of the tip {ahead:.3e} m, "
+                 f"grip force {force:.4e} N")
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("case",
                         choices=["cantilever", "bar-2d", "mesh-bar", "bar-3d-gmsh", "notched-gmsh", "kirsch",
-                                 "crack"])
+                                 "crack", "edge-crack"])
     parser.add_argument("--pd-fem", type=Path, required=True)
     parser.add_argument("--source", type=Path, required=True, help="fem_reference/ folder")
     parser.add_argument("--work", type=Path, required=True)
     args = parser.parse_args()
     cases = {"cantilever": cantilever, "bar-2d": bar_2d, "mesh-bar": mesh_bar, "bar-3d-gmsh": bar_3d_gmsh,
-             "notched-gmsh": notched_gmsh, "crack": crack,
+             "notched-gmsh": notched_gmsh, "crack": crack, "edge-crack": edge_crack,
              "kirsch": kirsch}
     sys.exit(0 if cases[args.case](args) else 1)
 
