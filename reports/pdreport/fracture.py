@@ -9,8 +9,8 @@ from .page import Page
 
 # The runs of the fracture case folders (verification/cases/<folder>/case.yaml), in the order the
 # section lists them: the quasi-static ones first, then the dynamic ones.
-CASES = ("fracture-stop", "crack-opening", "dcb", "dcb-fine", "kalthoff-winkler",
-         "kalthoff-winkler-fine", "glass-branching", "glass-branching-fine")
+CASES = ("fracture-stop", "fracture-stop-convergence", "crack-opening", "dcb", "dcb-fine",
+         "kalthoff-winkler", "kalthoff-winkler-fine", "glass-branching", "glass-branching-fine")
 
 
 def section(page: Page) -> str:
