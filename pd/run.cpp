@@ -169,8 +169,12 @@ Command add_run_command(CLI::App& app) {
             // Only that a set is there: which one, and what kind of file, the library says
             // (checkpoint_set_ranks, the checkpoint reader). Not collective: every rank sees
             // the same folder, so all accept or all refuse.
-            if (!checkpoint_sets_on_disk(path).empty()) {
+            std::error_code ec; // e.g. a name too long: said, not thrown out of the parser
+            if (std::filesystem::exists(path, ec) || !checkpoint_sets_on_disk(path).empty()) {
               return std::string{};
+            }
+            if (ec) {
+              return path + ": " + ec.message();
             }
             const std::filesystem::path base(path);
             return "File does not exist: " + path + " (nor the pieces " + base.stem().string() +
