@@ -28,6 +28,16 @@ std::filesystem::path write_elastic_variant(const std::filesystem::path& scene_f
                                             const std::array<bool, 2>& tip,
                                             const std::filesystem::path& file) {
   YAML::Node s = YAML::LoadFile(scene_file.string());
+  // The variant is written elsewhere, so files the scene names relative to itself would be lost.
+  for (const YAML::Node& body : s["bodies"]) {
+    for (const char* key : {"mesh", "geometry", "particles"}) {
+      if (body[key]) {
+        throw std::runtime_error(
+            fmt::format("{}: FE compliance of a body read from a file ('{}') is not supported yet",
+                        scene_file.string(), key));
+      }
+    }
+  }
   s.remove("effects");
   s.remove("output");
   YAML::Node solver;
