@@ -34,13 +34,14 @@ MPIEXEC may carry options ("mpiexec --oversubscribe"); as root, --allow-run-as-r
 """
 import json
 import os
-import re
 import shlex
 import signal
 import subprocess
 import sys
 import time
 from pathlib import Path
+
+import compare_runs
 
 HERE = Path(__file__).resolve().parent
 
@@ -273,9 +274,8 @@ def rank_change(pd, mpiexec, scene, work, pairs):
     every = ["--checkpoint-every", "300"]
     a = work / "uninterrupted"
     pd_run(pd, mpiexec, 1, scene, a, every)
-    damage = re.search(r'Name="damage"[^>]*>(.*?)</DataArray>',
-                       (a / "particles-00000600.vtu").read_text(), re.S)
-    damaged = sum(1 for x in damage.group(1).split() if float(x) > 0)
+    damage = compare_runs.arrays(a / "particles-00000600.vtu")["damage"]
+    damaged = sum(1 for x in damage if float(x) > 0)
     if damaged == 0:
         fail("no bond breaks before the checkpoint at step 600: the test would not see them")
     short = work / "short.yaml"

@@ -117,7 +117,6 @@ ComplianceGriffith griffith_load_from_fe_compliance(const std::filesystem::path&
   }
   ComplianceGriffith out;
   out.crack_step = h;
-  std::vector<double> openings, compliances;
   for (std::size_t level = 0; level < loads[1].size(); ++level) {
     // Each tip moves by 2h between the shorter and the longer crack.
     const double dp_da = (loads[2][level] - loads[0][level]) / (tips * 2 * h * thickness);
@@ -128,18 +127,11 @@ ComplianceGriffith griffith_load_from_fe_compliance(const std::filesystem::path&
                                            g));
     }
     out.level_loads.push_back(loads[1][level] * std::sqrt(g0 / g));
-    openings.push_back(grip_opening * std::sqrt(g0 / g));
-    compliances.push_back(grip_opening / loads[1][level]);
-    out.energy_release_rate = g;
   }
   // pd-fem halves the mesh size from level to level.
-  const auto extrapolated = [](const std::vector<double>& levels) {
-    const auto n = levels.size();
-    return n < 2 ? levels.back() : 2 * levels[n - 1] - levels[n - 2];
-  };
-  out.failure_load = extrapolated(out.level_loads);
-  out.opening_at_failure = extrapolated(openings);
-  out.compliance = extrapolated(compliances);
+  const auto n = out.level_loads.size();
+  out.failure_load =
+      n < 2 ? out.level_loads.back() : 2 * out.level_loads[n - 1] - out.level_loads[n - 2];
   return out;
 }
 

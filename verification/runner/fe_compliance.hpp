@@ -20,9 +20,6 @@ struct ComplianceGriffith {
   double failure_load = 0;         ///< extrapolated in the FE mesh size
   std::vector<double> level_loads; ///< the same on each FE level, coarse to fine
   double crack_step = 0;           ///< h: each tip moved by ±h
-  double energy_release_rate = 0;  ///< G at the scene's own grip opening, finest level
-  double opening_at_failure = 0;   ///< the grips' opening at the failure load (extrapolated)
-  double compliance = 0; ///< grips' opening / probe value with the crack as given (extrapolated)
 };
 
 /// `scene_file` holds a crack (the scene's first, a segment) with one or two tips (ends inside a

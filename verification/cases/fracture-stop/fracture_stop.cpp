@@ -7,13 +7,15 @@
 #include "fe_compliance.hpp"
 #include "libpd/app/run.hpp"
 #include "libpd/io/scene.hpp"
+#include "observed_order.hpp"
 #include "verification.hpp"
 
 #include <chrono>
 #include <cmath>
 #include <fmt/format.h>
-#include <limits>
 #include <stdexcept>
+#include <utility>
+#include <vector>
 
 namespace pd::verification {
 
@@ -110,8 +112,8 @@ Json run_fracture_stop_convergence(const Context& ctx) {
   const Reference ref = griffith_reference(ctx, scene_file, base);
   record_reference(out, ref);
   Json rows = Json::array();
-  bool failed_at_each = true, within = true, falling = true;
-  double previous = std::numeric_limits<double>::infinity();
+  bool failed_at_each = true, within = true;
+  std::vector<std::pair<double, double>> spacing_error;
   for (const int refine : {1, 2, 4}) {
     Scene s = base;
     s.model.lattice.spacing /= refine;
@@ -132,10 +134,12 @@ Json run_fracture_stop_convergence(const Context& ctx) {
                to_string(r.result.status));
     failed_at_each = failed_at_each && r.result.status == RunStatus::failed;
     within = within && std::abs(error) <= 0.05;
-    falling = falling && std::abs(error) < previous;
-    previous = std::abs(error);
+    spacing_error.emplace_back(s.model.lattice.spacing, error);
   }
+  const ObservedOrder order = observed_order(spacing_error);
+  const bool falling = order.monotone;
   out["runs"] = std::move(rows);
+  out["observed_order"] = to_json(order);
   out["within_5_percent_at_each"] = within;
   out["error_falls_at_each_refinement"] = falling;
   finish_case(out,
