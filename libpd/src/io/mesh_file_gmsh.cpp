@@ -244,20 +244,12 @@ void read_groups(GmshSession& s, int dim, const Elements& elements, MeshBody& bo
           }
           continue;
         }
-        const std::size_t per = tags[t].empty() ? 0 : nodes[t].size() / tags[t].size();
-        for (std::size_t e = 0; e < tags[t].size(); ++e) {
-          const auto first = nodes[t].begin() + static_cast<long>(e * per);
-          const auto found = particles_at_node.find(*first);
-          if (found == particles_at_node.end()) {
-            continue;
-          }
-          for (const std::uint32_t p : found->second) {
-            const auto begin = elements.nodes.begin() + static_cast<long>(elements.offsets[p]);
-            const auto end = elements.nodes.begin() + static_cast<long>(elements.offsets[p + 1]);
-            if (std::all_of(first, first + static_cast<long>(per),
-                            [&](std::size_t v) { return std::find(begin, end, v) != end; })) {
-              selected.push_back(p);
-            }
+        // Every element with a node on the group (mesh_file.hpp): the elements with a whole
+        // facet on it alone leave gaps between them, and a support on those held a comb.
+        for (const std::size_t v : nodes[t]) {
+          const auto found = particles_at_node.find(v);
+          if (found != particles_at_node.end()) {
+            selected.insert(selected.end(), found->second.begin(), found->second.end());
           }
         }
       }

@@ -279,7 +279,7 @@ TEST_F(MeshFile, PhysicalGroupsNameTheirElementsParticles) {
   const double size = 0.3;
   const pd::MeshBody body =
       pd::read_mesh_file(write(dir / "hexes.msh", box_mesh(3, size, false).text()), 3, 1.0);
-  // A face group: the particles of the elements on that face (x index 0: 9 of 27).
+  // A face group: the particles of the elements with a node on that face (x index 0: 9 of 27).
   const auto& left = body.group("left");
   ASSERT_EQ(left.size(), 9U);
   for (const std::uint32_t p : left) {
@@ -293,7 +293,8 @@ TEST_F(MeshFile, PhysicalGroupsNameTheirElementsParticles) {
   const pd::MeshBody plate =
       pd::read_mesh_file(write(dir / "tris.msh", plate_mesh(8, 2, 0.4, 0.1, true).text()), 2, 0.01);
   const auto& right = plate.group("right");
-  ASSERT_EQ(right.size(), 2U); // of the two triangles per cell, one has the edge x = a
+  // Both triangles of each of the two cells at x = a: one has an edge on it, the other a corner.
+  ASSERT_EQ(right.size(), 4U);
   for (const std::uint32_t p : right) {
     EXPECT_GT(plate.cloud.position[p][0], 0.4 - 0.05);
   }

@@ -9,7 +9,11 @@
 //
 // Physical groups name sets of particles: a group of the body's dimension holds the particles of
 // its elements; a group of lower dimension (faces, edges, points) holds the particles whose
-// element contains a whole element of the group (a face group: the elements on that face).
+// element has a node on it (a face group: the layer of elements along that face, those touching
+// it at an edge or a corner included). Only the elements with a whole facet on the face would
+// leave gaps between them: on an unstructured mesh a support on those held a comb, the material
+// between its teeth slipped, and a plate of triangles in tension stretched 10 % too far (a
+// lattice support holds a whole column of cells).
 //
 // A mesh that cannot be a body is refused with MeshFileError naming the file and the element or
 // group: inverted or zero-volume elements, no element of the scene's dimension, a 2D mesh off the
