@@ -625,14 +625,14 @@ namespace {
 /// mean of its ends' per-axis factors (d < dim): the shared step of the axis-wise corrections.
 template <class PerBond>
 void scale_by_axis_factors(const ParticleSet& particles, const BondFamily& family, int dim,
-                           const std::vector<std::array<double, 3>>& g, std::vector<double>& factor,
-                           PerBond per_bond) {
+                           std::size_t body_count, const std::vector<std::array<double, 3>>& g,
+                           std::vector<double>& factor, PerBond per_bond) {
   for (std::size_t i = 0; i < particles.size(); ++i) {
     for (std::size_t k = family.offsets[i]; k < family.offsets[i + 1]; ++k) {
       const std::size_t j = family.neighbour[k];
       std::array<double, 3> mean{1, 1, 1};
       for (std::size_t d = 0; d < static_cast<std::size_t>(dim); ++d) {
-        mean[d] = 0.5 * (g[i][d] + g[j][d]);
+        mean[d] = j >= body_count ? g[i][d] : i >= body_count ? g[j][d] : 0.5 * (g[i][d] + g[j][d]);
       }
       factor[k] *= per_bond(bond_vector(particles, i, j), family.inverse_length[k], mean);
     }
@@ -642,11 +642,24 @@ void scale_by_axis_factors(const ParticleSet& particles, const BondFamily& famil
 } // namespace
 
 std::vector<double> bond_correction_factors(const CorrectionSpec& spec,
-                                            const ParticleSet& particles,
-                                            const BondFamily& family) {
+                                            const ParticleSet& particles, const BondFamily& family,
+                                            std::size_t body_count) {
   const std::size_t n = particles.size();
   const int dim = spec.dimension.dim;
   std::vector<double> factor = volume_correction_factors(spec, particles, family);
+  const auto tensor_along = [dim](const Vec3& xi, double inv, const std::array<double, 3>& mean) {
+    double phi = 0; // n·G·n with the mean diagonal tensor
+    for (std::size_t d = 0; d < static_cast<std::size_t>(dim); ++d) {
+      phi += mean[d] * xi[d] * inv * xi[d] * inv;
+    }
+    return phi;
+  };
+  if (spec.volume_correction == VolumeCorrection::tensor) {
+    // A ghost's own neighbourhood is cut off at the ghost layer's edge: its factors would
+    // correct that, so its bonds take the body particle's.
+    const auto g = tensor_surface_factors(spec, particles, family, factor);
+    scale_by_axis_factors(particles, family, dim, body_count, g, factor, tensor_along);
+  }
   switch (spec.surface_correction) {
   case SurfaceCorrection::none:
   case SurfaceCorrection::ghost: // ghost particles give every particle its horizon (model.cpp)
@@ -675,7 +688,7 @@ std::vector<double> bond_correction_factors(const CorrectionSpec& spec,
     //   g_ij = ( Σ_d (n_d / g_d)² )^(−1/2)
     // which gives g_d for a bond along axis d and is symmetric in i and j.
     const auto g = energy_surface_factors(spec, particles, family, factor);
-    scale_by_axis_factors(particles, family, dim, g, factor,
+    scale_by_axis_factors(particles, family, dim, body_count, g, factor,
                           [dim](const Vec3& xi, double inv, const std::array<double, 3>& mean) {
                             double s = 0;
                             for (std::size_t d = 0; d < static_cast<std::size_t>(dim); ++d) {
@@ -688,14 +701,7 @@ std::vector<double> bond_correction_factors(const CorrectionSpec& spec,
   }
   case SurfaceCorrection::tensor: {
     const auto g = tensor_surface_factors(spec, particles, family, factor);
-    scale_by_axis_factors(particles, family, dim, g, factor,
-                          [dim](const Vec3& xi, double inv, const std::array<double, 3>& mean) {
-                            double phi = 0; // n·G·n with the mean diagonal tensor
-                            for (std::size_t d = 0; d < static_cast<std::size_t>(dim); ++d) {
-                              phi += mean[d] * xi[d] * inv * xi[d] * inv;
-                            }
-                            return phi;
-                          });
+    scale_by_axis_factors(particles, family, dim, body_count, g, factor, tensor_along);
     break;
   }
   case SurfaceCorrection::macek_silling: {

@@ -36,6 +36,63 @@ Site site_of(const Vec3& x, int dim, const LatticeSpec& l) {
   return s;
 }
 
+/// Every lattice site whose centre lies in one of `mesh`'s simplices (on a face counts as in),
+/// added to `sites`.
+void sites_inside_simplices(int dim, const LatticeSpec& l, const PointCloud& mesh,
+                            std::unordered_set<Site, SiteHash>& sites) {
+  const auto d = static_cast<std::size_t>(dim);
+  const double shift = lattice_shift(l);
+  // Barycentric coordinates within round-off of the lattice count as inside, so that a site on a
+  // face shared by two simplices is not lost to both.
+  const double tolerance = 1e-9;
+  for (std::size_t s = 0; s + d < mesh.simplex.size(); s += d + 1) {
+    std::array<Vec3, 4> c{};
+    std::array<long long, 3> first{0, 0, 0}, last{0, 0, 0};
+    for (std::size_t k = 0; k <= d; ++k) {
+      c[k] = mesh.corner[mesh.simplex[s + k]];
+    }
+    for (std::size_t a = 0; a < d; ++a) {
+      double lo = c[0][a], hi = c[0][a];
+      for (std::size_t k = 1; k <= d; ++k) {
+        lo = std::min(lo, c[k][a]);
+        hi = std::max(hi, c[k][a]);
+      }
+      first[a] = static_cast<long long>(std::ceil((lo - l.origin[a]) / l.spacing - shift - 1e-9));
+      last[a] = static_cast<long long>(std::floor((hi - l.origin[a]) / l.spacing - shift + 1e-9));
+    }
+    // x = c0 + E b, b the barycentric coordinates of corners 1..d.
+    Eigen::Matrix3d e = Eigen::Matrix3d::Identity();
+    for (std::size_t k = 1; k <= d; ++k) {
+      for (std::size_t a = 0; a < d; ++a) {
+        e(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(k - 1)) = c[k][a] - c[0][a];
+      }
+    }
+    const Eigen::Matrix3d inverse = e.inverse();
+    Site site{0, 0, 0};
+    for (site[2] = first[2]; site[2] <= last[2]; ++site[2]) {
+      for (site[1] = first[1]; site[1] <= last[1]; ++site[1]) {
+        for (site[0] = first[0]; site[0] <= last[0]; ++site[0]) {
+          Eigen::Vector3d x = Eigen::Vector3d::Zero();
+          for (std::size_t a = 0; a < d; ++a) {
+            x(static_cast<Eigen::Index>(a)) =
+                l.origin[a] + (static_cast<double>(site[a]) + shift) * l.spacing - c[0][a];
+          }
+          const Eigen::Vector3d b = inverse * x;
+          double rest = 1;
+          bool inside = true;
+          for (std::size_t k = 0; k < d; ++k) {
+            inside = inside && b(static_cast<Eigen::Index>(k)) >= -tolerance;
+            rest -= b(static_cast<Eigen::Index>(k));
+          }
+          if (inside && rest >= -tolerance) {
+            sites.insert(site);
+          }
+        }
+      }
+    }
+  }
+}
+
 /// Quadratic basis around a dependant at p, restricted by the clamp planes it lies behind.
 class Basis {
 public:
@@ -132,11 +189,20 @@ std::vector<double> fit_weights(const Basis& basis, const Vec3& p,
 } // namespace
 
 std::vector<Vec3> ghost_sites(int dim, const LatticeSpec& lattice, HorizonRule rule,
-                              const std::vector<Vec3>& body) {
+                              const std::vector<Vec3>& body,
+                              const std::vector<const PointCloud*>& mesh_of_body,
+                              const std::vector<std::uint16_t>& body_of) {
   std::unordered_set<Site, SiteHash> occupied;
   occupied.reserve(body.size());
-  for (const Vec3& x : body) {
-    occupied.insert(site_of(x, dim, lattice));
+  for (std::size_t i = 0; i < body.size(); ++i) {
+    if (body_of.empty() || mesh_of_body.empty() || mesh_of_body[body_of[i]] == nullptr) {
+      occupied.insert(site_of(body[i], dim, lattice));
+    }
+  }
+  for (const PointCloud* mesh : mesh_of_body) {
+    if (mesh != nullptr) {
+      sites_inside_simplices(dim, lattice, *mesh, occupied);
+    }
   }
   std::unordered_set<Site, SiteHash> ghosts;
   for (const Vec3& x : body) {

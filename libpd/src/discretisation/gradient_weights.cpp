@@ -472,7 +472,8 @@ double fracture_energy_weight_ratio(const CorrectionSpec& spec) {
                              w = gradient.weight(xi, lambda);
                              break;
                            case VolumeCorrection::fitted:
-                             break; // fitted around 1, per particle: not a lattice's weights
+                           case VolumeCorrection::tensor:
+                             break; // around 1, per particle: not a lattice's weights
                            }
                            const double term = xi[normal] * norm(xi);
                            weighted += w * term;

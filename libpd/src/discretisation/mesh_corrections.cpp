@@ -11,8 +11,8 @@ std::string mesh_corrections_note(const ModelSpec& spec) {
   }
   return std::string("surface ") + to_string(spec.surface_correction) + ", volume " +
          to_string(spec.volume_correction) +
-         ": a mesh body is an unstructured set, so the lattice defaults (ghost layers, gradient "
-         "weights) do not apply; these correct uniform strain, not bending";
+         ": a mesh body is an unstructured set, so its bonds cannot take the lattice's gradient "
+         "weights (docs/scenes.md, meshes)";
 }
 
 } // namespace pd

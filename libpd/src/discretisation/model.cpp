@@ -305,7 +305,12 @@ namespace {
 /// once the bond family is known.
 void append_ghost_sites(const ModelSpec& spec, ParticleSet& particles) {
   const GhostSiteReach reach = ghost_site_reach(spec.corrections());
-  const auto sites = ghost_sites(spec.dimension.dim, reach.lattice, reach.rule, particles.position);
+  std::vector<const PointCloud*> mesh_of_body;
+  for (const BodySpec& b : spec.bodies) {
+    mesh_of_body.push_back(b.mesh ? b.points.get() : nullptr);
+  }
+  const auto sites = ghost_sites(spec.dimension.dim, reach.lattice, reach.rule, particles.position,
+                                 mesh_of_body, particles.body);
   const double volume = cell_volume(spec.dimension, spec.lattice.spacing);
   for (const Vec3& p : sites) {
     particles.position.push_back(p);
@@ -690,8 +695,7 @@ Model build_model(const ModelSpec& spec, ParticleSet particles) {
       std::all_of(spec.bodies.begin(), spec.bodies.end(),
                   [](const BodySpec& b) { return !b.points || b.mesh; })) {
     m.particles.particle_size.clear();
-    const char* why = spec.has_mesh_body() ? lattice_only(spec.surface_correction) : nullptr;
-    why = why != nullptr || !spec.has_mesh_body() ? why : lattice_only(spec.volume_correction);
+    const char* why = spec.has_mesh_body() ? lattice_only(spec.volume_correction) : nullptr;
     if (why != nullptr) {
       throw std::runtime_error(std::string("a mesh body is an unstructured set, but a correction "
                                            "of the model needs a lattice: ") +
@@ -737,7 +741,7 @@ Model build_model(const ModelSpec& spec, ParticleSet particles) {
     m.field.yield_stretch = k.yield_stretch;
   } else {
     std::vector<double> correction =
-        bond_correction_factors(spec.corrections(), m.particles, m.family);
+        bond_correction_factors(spec.corrections(), m.particles, m.family, body_count);
     if (consistent_mirror_coupling(spec.mirror_coupling, m.constraints) ||
         !m.extrapolated.empty()) {
       // The energy W_c of mirror_constraints.hpp and ghost_layers.hpp: bonds between a body

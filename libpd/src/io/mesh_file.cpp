@@ -93,6 +93,11 @@ MeshBody take(const std::string& path, pd_mesh_body* flat) {
                                             flat->group_particle + flat->group_begin[g + 1]);
   }
   body.warnings.assign(flat->warning, flat->warning + flat->warnings);
+  body.cloud.corner.resize(flat->corners);
+  for (std::size_t c = 0; c < flat->corners; ++c) {
+    body.cloud.corner[c] = {flat->corner[3 * c], flat->corner[3 * c + 1], flat->corner[3 * c + 2]};
+  }
+  body.cloud.simplex.assign(flat->simplex, flat->simplex + flat->simplex_indices);
   return body;
 }
 

@@ -111,10 +111,31 @@ struct Elements {
     double orientation; // 3D: the signed volume; 2D: the corners' signed area
   };
   std::vector<Element> list;
-  std::vector<std::size_t> nodes;      // every node of every element, in particle order
-  std::vector<std::size_t> offsets{0}; // element p's nodes: [offsets[p], offsets[p + 1])
+  std::vector<std::size_t> simplex_nodes; // the elements cut into simplices: dim + 1 corner tags
+  std::vector<std::size_t> nodes;         // every node of every element, in particle order
+  std::vector<std::size_t> offsets{0};    // element p's nodes: [offsets[p], offsets[p + 1])
   std::unordered_map<std::size_t, std::uint32_t> particle_of_element;
 };
+
+/// An element with `corners` corner nodes (Gmsh's order) cut into simplices, as local corner
+/// indices: quadrangles into two triangles, hexahedra into six tetrahedra around the diagonal
+/// 0–6, prisms into three, pyramids into two. Curved high-order elements become straight-sided.
+std::vector<std::array<std::size_t, 4>> simplices_of(int dim, int corners) {
+  if (dim == 2) {
+    return corners == 3 ? std::vector<std::array<std::size_t, 4>>{{0, 1, 2, 0}}
+                        : std::vector<std::array<std::size_t, 4>>{{0, 1, 2, 0}, {0, 2, 3, 0}};
+  }
+  switch (corners) {
+  case 4:
+    return {{0, 1, 2, 3}};
+  case 5:
+    return {{0, 1, 2, 4}, {0, 2, 3, 4}};
+  case 6:
+    return {{0, 1, 2, 3}, {1, 2, 3, 4}, {2, 3, 4, 5}};
+  default:
+    return {{0, 1, 2, 6}, {0, 2, 3, 6}, {0, 3, 7, 6}, {0, 7, 4, 6}, {0, 4, 5, 6}, {0, 5, 1, 6}};
+  }
+}
 
 /// One particle per element of dimension `dim`: its centroid and volume from Gauss sums of the
 /// element's own Jacobian.
@@ -169,6 +190,11 @@ Elements read_elements(GmshSession& s, int dim, double thickness,
       body.cloud.volume.push_back(dim == 2 ? std::abs(v) * thickness : v);
       out.nodes.insert(out.nodes.end(), nodes.begin() + static_cast<long>(e * n),
                        nodes.begin() + static_cast<long>((e + 1) * n));
+      for (const auto& piece : simplices_of(dim, primary)) {
+        for (std::size_t c = 0; c < static_cast<std::size_t>(dim) + 1; ++c) {
+          out.simplex_nodes.push_back(nodes[e * n + piece[c]]);
+        }
+      }
       out.offsets.push_back(out.nodes.size());
     }
   }
@@ -291,6 +317,15 @@ MeshBody extract_body(GmshSession& s, int dim, double thickness) {
   }
   const Elements elements = read_elements(s, dim, thickness, node, body);
   check_orientation(s, dim, elements, body);
+  std::unordered_map<std::size_t, std::uint32_t> corner_index;
+  for (const std::size_t tag : elements.simplex_nodes) {
+    const auto [at, added] =
+        corner_index.emplace(tag, static_cast<std::uint32_t>(body.cloud.corner.size()));
+    if (added) {
+      body.cloud.corner.push_back(node.at(tag));
+    }
+    body.cloud.simplex.push_back(at->second);
+  }
   read_groups(s, dim, elements, body);
   body.warnings = std::move(s.warnings);
   return body;
@@ -383,6 +418,8 @@ struct FlatBody {
   std::vector<const char*> name_pointers, warning_pointers;
   std::vector<std::size_t> group_begin{0};
   std::vector<std::uint32_t> group_particle;
+  std::vector<double> corner;
+  std::vector<std::uint32_t> simplex;
 };
 
 std::unique_ptr<FlatBody> flatten(MeshBody&& body) {
@@ -391,6 +428,10 @@ std::unique_ptr<FlatBody> flatten(MeshBody&& body) {
     out->position.insert(out->position.end(), {p[0], p[1], p[2]});
   }
   out->volume = std::move(body.cloud.volume);
+  for (const Vec3& c : body.cloud.corner) {
+    out->corner.insert(out->corner.end(), {c[0], c[1], c[2]});
+  }
+  out->simplex = std::move(body.cloud.simplex);
   for (auto& [name, particles] : body.groups) {
     out->names.push_back(name);
     out->group_particle.insert(out->group_particle.end(), particles.begin(), particles.end());
@@ -413,6 +454,10 @@ std::unique_ptr<FlatBody> flatten(MeshBody&& body) {
   f.group_particle = out->group_particle.data();
   f.warnings = out->warnings.size();
   f.warning = out->warning_pointers.data();
+  f.corners = out->corner.size() / 3;
+  f.corner = out->corner.data();
+  f.simplex_indices = out->simplex.size();
+  f.simplex = out->simplex.data();
   return out;
 }
 

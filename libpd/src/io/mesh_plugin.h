@@ -23,7 +23,11 @@ struct pd_mesh_body {
   const std::uint32_t* group_particle;
   std::size_t warnings;
   const char* const* warning;
-  void* owner; ///< the plug-in's own, for release
+  std::size_t corners;          ///< the elements' corner nodes
+  const double* corner;         ///< x, y, z of each
+  std::size_t simplex_indices;  ///< (dim + 1) × the simplices the elements are cut into
+  const std::uint32_t* simplex; ///< each simplex's corners: triangles (2D), tetrahedra (3D)
+  void* owner;                  ///< the plug-in's own, for release
 };
 
 struct pd_mesh_plugin {
@@ -38,6 +42,6 @@ struct pd_mesh_plugin {
 const pd_mesh_plugin* libpd_mesh_plugin();
 }
 
-inline constexpr std::uint32_t pd_mesh_plugin_version = 1;
+inline constexpr std::uint32_t pd_mesh_plugin_version = 2;
 inline constexpr const char* pd_mesh_plugin_module = "libpd_gmsh.so";
 inline constexpr const char* pd_mesh_plugin_entry = "libpd_mesh_plugin";

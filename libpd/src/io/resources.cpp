@@ -272,6 +272,17 @@ double body_particles(const ModelSpec& spec, Region& lattice_region) {
   return given + lattice_points_in_union(spec.dimension, spec.lattice, lattice_region);
 }
 
+/// The lattice bodies' region and the mesh bodies' bounding boxes: where ghost sites surround a
+/// body (mesh bodies are counted by their particles, not in the lattice region).
+Region with_mesh_boxes(const ModelSpec& spec, Region region) {
+  for (const BodySpec& b : spec.bodies) {
+    if (b.mesh) {
+      region.boxes.insert(region.boxes.end(), b.region.boxes.begin(), b.region.boxes.end());
+    }
+  }
+  return region;
+}
+
 } // namespace
 
 ResourceEstimate estimate_resources(const ModelSpec& spec, const SolverSpec& solver) {
@@ -292,7 +303,7 @@ ResourceEstimate estimate_resources(const ModelSpec& spec, const SolverSpec& sol
   if (spec.surface_correction == SurfaceCorrection::ghost) {
     const GhostSiteReach reach = weights ? ghost_site_reach(spec.corrections(), *weights)
                                          : GhostSiteReach{spec.lattice, spec.horizon_rule};
-    ghosts = ghost_sites_around_union(d, reach.lattice, reach.rule, all);
+    ghosts = ghost_sites_around_union(d, reach.lattice, reach.rule, with_mesh_boxes(spec, all));
   }
   const double n = bodies + ghosts;
   e.particles = n;

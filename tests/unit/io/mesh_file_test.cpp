@@ -4,6 +4,7 @@
 // so the element counts and volumes are known without Gmsh.
 #include "libpd/io/mesh_file.hpp"
 #include "libpd/io/scene.hpp"
+#include "libpd/kernel/force_kernel.hpp"
 
 #include <algorithm>
 #include <array>
@@ -458,6 +459,62 @@ std::string scene_text(const std::string& mesh, const std::string& model) {
          "probes:\n  - {name: back_uz, group: back, component: z}\n";
 }
 
+// The patch test on an unstructured set: a plate of Gmsh's triangles under uniform strain, with
+// the mesh bodies' default corrections (ghost layers outside its elements, `tensor` factors on
+// its irregular quadrature). Every ghost is displaced exactly (its quadratic fit reproduces a
+// linear field), so the energy W_c is Σ over the body particles of their own energies; the
+// continuum's is ½ε:C:ε over the plate's area.
+struct UniformStrain {
+  double xx, yy, xy;
+  double energy_density; ///< of the continuum [J/m³]
+};
+
+double energy_ratio_of_triangle_plate(const fs::path& dir, const UniformStrain& s) {
+  write(dir / "plate.geo", "SetFactory(\"OpenCASCADE\");\nRectangle(1) = {0, 0, 0, 0.1, 0.05};\n"
+                           "Physical Surface(\"plate\") = {1};\n");
+  const std::string path =
+      write(dir / "plate.yaml", "dimension: 2\nplane: stress\nthickness: 0.01\n"
+                                "lattice: {spacing: 0.0025}\n"
+                                "materials: {steel: {youngs_modulus: 200e9, density: 7800}}\n"
+                                "bodies: [{name: plate, material: steel, geometry: plate.geo}]\n"
+                                "solver: {integrator: static}\n");
+  pd::Model model = pd::build_model(pd::load_scene(path));
+  EXPECT_GT(model.ghost_count, 0U);
+  double volume = 0;
+  for (std::size_t i = 0; i < model.size() - model.ghost_count; ++i) {
+    volume += model.particles.volume[i];
+  }
+  std::vector<double> y(3 * model.size());
+  for (std::size_t i = 0; i < model.size(); ++i) {
+    const pd::Vec3& x = model.particles.position[i];
+    y[3 * i] = x[0] + s.xx * x[0] + s.xy * x[1];
+    y[3 * i + 1] = x[1] + s.xy * x[0] + s.yy * x[1];
+    y[3 * i + 2] = x[2];
+  }
+  return pd::make_force_evaluator(model)->strain_energy(y.data()) / (s.energy_density * volume);
+}
+
+constexpr double patch_strain = 1e-4, patch_young = 200e9, patch_nu = 1.0 / 3;
+
+TEST_F(MeshFile, UnstructuredTrianglesStoreTheContinuumEnergyUnderUniaxialStress) {
+  const fs::path dir = temp_folder("patch");
+  const double e = patch_strain, w = 0.5 * patch_young * e * e;
+  EXPECT_NEAR(energy_ratio_of_triangle_plate(dir, {e, -patch_nu * e, 0, w}), 1.0, 1e-3);
+  EXPECT_NEAR(energy_ratio_of_triangle_plate(dir, {-patch_nu * e, e, 0, w}), 1.0, 1e-3);
+}
+
+// Disabled: it fails, +1.5 % (issue 39). The `tensor` factors give each particle the
+// continuum's energies under uniaxial stress along the axes (a quadratic form in the bond
+// direction, dim numbers per particle); shear loads the bonds' n_x²n_y² moment, which that form
+// does not reach. A quartic form per particle (the fourth moments, as `fitted` matches them per
+// pair) would.
+TEST_F(MeshFile, DISABLED_UnstructuredTrianglesStoreTheContinuumEnergyUnderShear) {
+  const fs::path dir = temp_folder("patch-shear");
+  const double e = patch_strain;
+  const double w = 0.5 * patch_young / (2 * (1 + patch_nu)) * e * e; // ½Gγ²
+  EXPECT_NEAR(energy_ratio_of_triangle_plate(dir, {0, 0, e / 2, w}), 1.0, 1e-3);
+}
+
 TEST_F(MeshFile, PhysicalGroupsAreSceneRegionsAndMeshBodiesTakeLatticeFreeCorrections) {
   const fs::path dir = temp_folder("scene");
   write(dir / "hexes.msh", box_mesh(3, 0.3, false).text());
@@ -466,8 +523,23 @@ TEST_F(MeshFile, PhysicalGroupsAreSceneRegionsAndMeshBodiesTakeLatticeFreeCorrec
   EXPECT_EQ(scene.model.surface_correction, pd::mesh_surface_correction);
   EXPECT_EQ(scene.model.volume_correction, pd::mesh_volume_correction);
   const pd::Model model = pd::build_model(scene);
-  ASSERT_EQ(model.size(), 27U);
-  EXPECT_EQ(model.ghost_count, 0U);
+  ASSERT_EQ(model.size() - model.ghost_count, 27U);
+  // These hexahedra are the lattice's cells: the mesh body has the ghost sites (ghost_layers.hpp)
+  // that the same cube filled with the lattice has, none inside it.
+  pd::ModelSpec lattice = scene.model;
+  lattice.bodies[0].points = nullptr;
+  lattice.bodies[0].mesh = false;
+  lattice.bodies[0].region.boxes = {pd::Box{{0, 0, 0}, {0.3, 0.3, 0.3}}};
+  lattice.supports.clear(); // their groups are the mesh's particles
+  lattice.loads.clear();
+  const pd::Model cube = pd::build_model(lattice);
+  ASSERT_EQ(cube.size(), model.size());
+  EXPECT_GT(model.ghost_count, 27U);
+  for (std::size_t g = 27; g < model.size(); ++g) {
+    for (std::size_t a = 0; a < 3; ++a) {
+      EXPECT_NEAR(model.particles.position[g][a], cube.particles.position[g][a], 1e-12);
+    }
+  }
   std::set<std::uint32_t> held;
   for (const pd::Constraint& c : model.constraints) {
     held.insert(c.particle);
@@ -498,9 +570,6 @@ TEST_F(MeshFile, PhysicalGroupsAreSceneRegionsAndMeshBodiesTakeLatticeFreeCorrec
     }
     return std::string();
   };
-  const std::string ghost = scene_error(
-      write(dir / "ghost.yaml", scene_text("hexes.msh", "model: {surface_correction: ghost}\n")));
-  EXPECT_TRUE(contains(ghost, "surface_correction 'ghost' needs a lattice")) << ghost;
   const std::string gradient = scene_error(write(
       dir / "gradient.yaml", scene_text("hexes.msh", "model: {volume_correction: gradient}\n")));
   EXPECT_TRUE(contains(gradient, "volume_correction 'gradient' needs a lattice")) << gradient;

@@ -25,8 +25,11 @@ enum class SurfaceCorrection { none, volume, energy, macek_silling, tensor, ghos
 /// Quadrature weights of the bonds: partial-volume corrections of neighbour cells cut by the
 /// horizon (`linear`, `exact`), or lattice weights that reproduce the continuum's fourth moments
 /// (`moment`) and also its strain-gradient energy (`gradient`), see below; or, for sets that are
-/// not a lattice, weights fitted per pair to every particle's own neighbourhood (`fitted`).
-enum class VolumeCorrection { none, linear, exact, moment, gradient, fitted };
+/// not a lattice, weights fitted per pair to every particle's own neighbourhood (`fitted`), or
+/// per-particle factors that give it the continuum's energies under uniaxial stress (`tensor`:
+/// the tensor surface correction's factors, computed over the whole horizon that ghost layers
+/// complete, so that they correct the quadrature and not a missing part).
+enum class VolumeCorrection { none, linear, exact, moment, gradient, fitted, tensor };
 
 template <>
 struct EnumName<SurfaceCorrection> {
@@ -44,7 +47,7 @@ struct EnumName<SurfaceCorrection> {
 
 template <>
 struct EnumName<VolumeCorrection> {
-  static constexpr NameTable<VolumeCorrection, 6> table{{
+  static constexpr NameTable<VolumeCorrection, 7> table{{
       {"none", VolumeCorrection::none, "full neighbour volumes"},
       {"linear", VolumeCorrection::linear, "partial volume of cut cells, linear in the distance"},
       {"exact", VolumeCorrection::exact, "partial volume of cut cells, exact"},
@@ -53,6 +56,9 @@ struct EnumName<VolumeCorrection> {
        "lattice weights matching the 4th moments and the strain-gradient energy of a cell"},
       {"fitted", VolumeCorrection::fitted,
        "per-pair weights giving every particle's own neighbourhood the continuum's moments"},
+      {"tensor", VolumeCorrection::tensor,
+       "per-particle factors giving its own neighbourhood the continuum's uniaxial-stress "
+       "energies (the mesh bodies' default)"},
   }};
 };
 
@@ -248,7 +254,10 @@ double fracture_energy_weight_ratio(const CorrectionSpec& spec);
 
 /// The product of the surface and volume correction factors for every directed bond, in CSR
 /// order. All ones when both corrections are `none`.
+/// Particles from `body_count` on are ghosts (ghost_layers.hpp): per-particle factors are the body
+/// particles' own, and a bond between a body particle and a ghost takes the body particle's.
 std::vector<double> bond_correction_factors(const CorrectionSpec& spec,
-                                            const ParticleSet& particles, const BondFamily& family);
+                                            const ParticleSet& particles, const BondFamily& family,
+                                            std::size_t body_count = static_cast<std::size_t>(-1));
 
 } // namespace pd

@@ -36,6 +36,7 @@
 #include "libpd/discretisation/bond_family.hpp"
 #include "libpd/discretisation/constraint.hpp"
 #include "libpd/discretisation/lattice.hpp"
+#include "libpd/discretisation/point_cloud.hpp"
 
 #include <cstdint>
 #include <vector>
@@ -68,8 +69,18 @@ struct SymmetryPlane {
 /// where ghost particles go. A particle's own site is its position rounded to the lattice, so
 /// jittered particle sets keep their ghosts on the regular lattice. Deterministic order (sorted
 /// by site, x fastest).
+///
+/// Mesh bodies (mesh_of_body[b] for body b, null for a lattice body; body_of[i] is particle i's)
+/// are not a lattice: their particles are denser and irregular, so a cell may hold none of them and
+/// still lie inside the part. For them a site is inside when its centre lies in one of the mesh's
+/// simplices (PointCloud::simplex): the sites whose cells the mesh fills are never ghosts, the
+/// others within reach are, and the part's faces are as exact as the lattice's on faces that lie
+/// on cell faces (a box drawn from lattice multiples), a staircase of cells elsewhere, as for a
+/// lattice body minus a shape.
 std::vector<Vec3> ghost_sites(int dim, const LatticeSpec& lattice, HorizonRule rule,
-                              const std::vector<Vec3>& body);
+                              const std::vector<Vec3>& body,
+                              const std::vector<const PointCloud*>& mesh_of_body = {},
+                              const std::vector<std::uint16_t>& body_of = {});
 
 /// The radius, in lattice spacings, of the cloud each dependant's quadratic is fitted to: the
 /// smallest that gives a particle in a corner of a box enough neighbours for the whole quadratic

@@ -153,22 +153,19 @@ struct ModelSpec {
   }
 };
 
-/// The corrections of a bond-based model with a mesh body, until particles get weights of their
-/// own neighbourhood. The defaults assume a lattice: ghost sites are lattice sites outside the
-/// body's boxes, and `gradient` (also `moment`, `exact`) weighs a bond by the lattice offset it
-/// rounds to, so on an unstructured set both would be wrong without a sign of it. `tensor` is
-/// computed from each particle's own bonds against the continuum (corrections.hpp), so it holds
-/// on any set: the bulk's irregular quadrature and the free surfaces are both corrected for
-/// uniform strain, not in bending. `none` leaves the neighbours' volumes as the mesh gives them.
-inline constexpr SurfaceCorrection mesh_surface_correction = SurfaceCorrection::tensor;
-inline constexpr VolumeCorrection mesh_volume_correction = VolumeCorrection::none;
+/// The corrections of a bond-based model with a mesh body. Ghost layers, as on the lattice: the
+/// lattice sites outside the part (outside its elements, ghost_layers.hpp) continue every body
+/// particle's horizon, quadratic-exact, so a thin part bends as the continuum does. `gradient`
+/// (also `moment`, `exact`) weighs a bond by the lattice offset it rounds to, which an
+/// unstructured set does not have; `tensor` gives each particle's own neighbourhood, ghosts
+/// included, the continuum's energy under uniaxial stress along each axis (corrections.hpp),
+/// which corrects the irregular quadrature of the mesh (the bulk of a mesh of triangles is a few
+/// per cent soft without it).
+inline constexpr SurfaceCorrection mesh_surface_correction = SurfaceCorrection::ghost;
+inline constexpr VolumeCorrection mesh_volume_correction = VolumeCorrection::tensor;
 
-/// Whether a correction needs the lattice (a mesh body cannot take it): what it says why, or
-/// nullptr.
-inline const char* lattice_only(SurfaceCorrection s) {
-  return s == SurfaceCorrection::ghost ? "ghost sites are lattice sites outside the bodies' boxes"
-                                       : nullptr;
-}
+/// Whether a volume correction needs the lattice (a mesh body cannot take it): what it says why,
+/// or nullptr. Every surface correction works on any set.
 inline const char* lattice_only(VolumeCorrection v) {
   switch (v) {
   case VolumeCorrection::gradient:

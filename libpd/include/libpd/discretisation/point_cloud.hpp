@@ -15,6 +15,11 @@ struct PointCloud {
   std::vector<Vec3> position;
   std::vector<double> volume; ///< [m³] (2D: area × thickness; the file gives it as it is)
   std::vector<double> size;   ///< h [m] per particle, or empty: derived (eq. 115)
+  /// The region a mesh body's particles fill (io/mesh_file.hpp), for the ghost sites outside it
+  /// (ghost_layers.hpp): its elements cut into simplices, dim + 1 indices into `corner` each.
+  /// Empty for particle files.
+  std::vector<Vec3> corner;
+  std::vector<std::uint32_t> simplex;
 
   std::size_t count() const { return position.size(); }
 };

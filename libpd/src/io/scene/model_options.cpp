@@ -87,22 +87,21 @@ void settle_mesh_corrections(Reader& r, ModelSpec& model, const Marks& marks) {
   if (!model.has_mesh_body() || model.effects.bond_model == BondModel::virtual_fibres) {
     return; // the fibre model gives a point cloud's particles weights of their own already
   }
-  const auto settle = [&](auto& correction, auto mesh_default, std::string_view key) {
-    const Entry* given = marks.model.find(key);
-    if (given == nullptr) {
-      correction = mesh_default;
-      return;
-    }
-    if (const char* why = lattice_only(correction)) {
-      r.fail(given->at(),
-             fmt::format("{} '{}' needs a lattice ({}), and a mesh body is an unstructured set",
-                         key, name_of(correction), why),
-             fmt::format("remove '{}': with a mesh body it is '{}' (docs/scenes.md, meshes)", key,
-                         name_of(mesh_default)));
-    }
-  };
-  settle(model.surface_correction, mesh_surface_correction, "surface_correction");
-  settle(model.volume_correction, mesh_volume_correction, "volume_correction");
+  if (marks.model.find("surface_correction") == nullptr) {
+    model.surface_correction = mesh_surface_correction;
+  }
+  const Entry* given = marks.model.find("volume_correction");
+  if (given == nullptr) {
+    model.volume_correction = mesh_volume_correction;
+  } else if (const char* why = lattice_only(model.volume_correction)) {
+    r.fail(given->at(),
+           fmt::format("volume_correction '{}' needs a lattice ({}), and a mesh body is an "
+                       "unstructured set",
+                       name_of(model.volume_correction), why),
+           fmt::format("remove 'volume_correction': with a mesh body it is '{}' (docs/scenes.md, "
+                       "meshes)",
+                       name_of(mesh_volume_correction)));
+  }
 }
 
 void check_bond_model(Reader& r, const Scene& scene, const Marks& marks) {
