@@ -12,6 +12,7 @@
 #include <fstream>
 #include <limits>
 #include <numbers>
+#include <numeric>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -283,6 +284,23 @@ Region with_mesh_boxes(const ModelSpec& spec, Region region) {
   return region;
 }
 
+/// Particles per lattice cell, averaged over the bodies' particles: a mesh body's elements are
+/// smaller than the cells (Gmsh's tetrahedra of size λ: about six per cell), so each particle has
+/// that many times the lattice's neighbours.
+double particles_per_cell(const ModelSpec& spec, double bodies) {
+  double mesh_particles = 0, mesh_cells = 0;
+  for (const BodySpec& b : spec.bodies) {
+    if (b.mesh) {
+      const double volume = std::accumulate(b.points->volume.begin(), b.points->volume.end(), 0.0);
+      mesh_particles += static_cast<double>(b.points->count());
+      mesh_cells += volume / cell_volume(spec.dimension, spec.lattice.spacing);
+    }
+  }
+  return bodies > 0 && mesh_cells > 0
+             ? (bodies - mesh_particles + mesh_particles * (mesh_particles / mesh_cells)) / bodies
+             : 1.0;
+}
+
 } // namespace
 
 ResourceEstimate estimate_resources(const ModelSpec& spec, const SolverSpec& solver) {
@@ -317,7 +335,7 @@ ResourceEstimate estimate_resources(const ModelSpec& spec, const SolverSpec& sol
     }
     family = std::min(family, weighted);
   }
-  e.bonds_per_particle = std::min(family, std::max(n - 1, 0.0));
+  e.bonds_per_particle = std::min(family * particles_per_cell(spec, bodies), std::max(n - 1, 0.0));
   e.bonds = 0.5 * (bodies + 0.5 * ghosts) * e.bonds_per_particle;
   const double directed = 2.0 * e.bonds;
 
