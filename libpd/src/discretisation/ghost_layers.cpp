@@ -5,6 +5,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <tuple>
 #include <unordered_set>
 
 namespace pd {
@@ -41,7 +42,6 @@ Site site_of(const Vec3& x, int dim, const LatticeSpec& l) {
 void sites_inside_simplices(int dim, const LatticeSpec& l, const PointCloud& mesh,
                             std::unordered_set<Site, SiteHash>& sites) {
   const auto d = static_cast<std::size_t>(dim);
-  const double shift = lattice_shift(l);
   // Barycentric coordinates within round-off of the lattice count as inside, so that a site on a
   // face shared by two simplices is not lost to both.
   const double tolerance = 1e-9;
@@ -57,8 +57,7 @@ void sites_inside_simplices(int dim, const LatticeSpec& l, const PointCloud& mes
         lo = std::min(lo, c[k][a]);
         hi = std::max(hi, c[k][a]);
       }
-      first[a] = static_cast<long long>(std::ceil((lo - l.origin[a]) / l.spacing - shift - 1e-9));
-      last[a] = static_cast<long long>(std::floor((hi - l.origin[a]) / l.spacing - shift + 1e-9));
+      std::tie(first[a], last[a]) = index_range(l, static_cast<int>(a), lo, hi);
     }
     // x = c0 + E b, b the barycentric coordinates of corners 1..d.
     Eigen::Matrix3d e = Eigen::Matrix3d::Identity();
@@ -75,7 +74,7 @@ void sites_inside_simplices(int dim, const LatticeSpec& l, const PointCloud& mes
           Eigen::Vector3d x = Eigen::Vector3d::Zero();
           for (std::size_t a = 0; a < d; ++a) {
             x(static_cast<Eigen::Index>(a)) =
-                l.origin[a] + (static_cast<double>(site[a]) + shift) * l.spacing - c[0][a];
+                lattice_coordinate(l, static_cast<int>(a), site[a]) - c[0][a];
           }
           const Eigen::Vector3d b = inverse * x;
           double rest = 1;
@@ -224,8 +223,7 @@ std::vector<Vec3> ghost_sites(int dim, const LatticeSpec& lattice, HorizonRule r
   for (const Site& s : sorted) {
     Vec3 p = unused_axes;
     for (std::size_t a = 0; a < static_cast<std::size_t>(dim); ++a) {
-      p[a] = lattice.origin[a] +
-             (static_cast<double>(s[a]) + lattice_shift(lattice)) * lattice.spacing;
+      p[a] = lattice_coordinate(lattice, static_cast<int>(a), s[a]);
     }
     out.push_back(p);
   }

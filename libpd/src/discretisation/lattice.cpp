@@ -21,18 +21,11 @@ double cell_volume(const ModelDimension& d, double spacing) {
   }
 }
 
-namespace {
-
-/// Lattice coordinate of index n along one axis.
 double lattice_coordinate(const LatticeSpec& l, int axis, long long n) {
   const double shift = l.convention == LatticeConvention::cell_centered ? 0.5 : 0.0;
   return l.origin[axis] + (static_cast<double>(n) + shift) * l.spacing;
 }
 
-/// Index range [first, last] of lattice points inside [lo, hi] along one axis.
-/// A point on a face counts as inside (within 1e-6 λ, against round-off in box corners). For boxes
-/// aligned with the lattice this never matters for cell-centred lattices (their points sit half a
-/// spacing from the faces); for node-based lattices it puts the nodes on the faces in the box.
 std::pair<long long, long long> index_range(const LatticeSpec& l, int axis, double lo, double hi) {
   const double shift = l.convention == LatticeConvention::cell_centered ? 0.5 : 0.0;
   const double tol = 1e-6;
@@ -40,6 +33,8 @@ std::pair<long long, long long> index_range(const LatticeSpec& l, int axis, doub
   const double b = (hi - l.origin[axis]) / l.spacing - shift;
   return {static_cast<long long>(std::ceil(a - tol)), static_cast<long long>(std::floor(b + tol))};
 }
+
+namespace {
 
 struct IndexHash {
   std::size_t operator()(const std::array<long long, 3>& k) const {

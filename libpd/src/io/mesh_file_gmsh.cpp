@@ -111,9 +111,8 @@ struct Elements {
     double orientation; // 3D: the signed volume; 2D: the corners' signed area
   };
   std::vector<Element> list;
-  std::vector<std::size_t> simplex_nodes; // the elements cut into simplices: dim + 1 corner tags
-  std::vector<std::size_t> nodes;         // every node of every element, in particle order
-  std::vector<std::size_t> offsets{0};    // element p's nodes: [offsets[p], offsets[p + 1])
+  std::vector<std::size_t> nodes;      // every node of every element, in particle order
+  std::vector<std::size_t> offsets{0}; // element p's nodes: [offsets[p], offsets[p + 1])
   std::unordered_map<std::size_t, std::uint32_t> particle_of_element;
 };
 
@@ -138,7 +137,7 @@ std::vector<std::array<std::size_t, 4>> simplices_of(int dim, int corners) {
 }
 
 /// One particle per element of dimension `dim`: its centroid and volume from Gauss sums of the
-/// element's own Jacobian.
+/// element's own Jacobian; and the elements cut into simplices (PointCloud::simplex).
 Elements read_elements(GmshSession& s, int dim, double thickness,
                        const std::unordered_map<std::size_t, Vec3>& node, MeshBody& body) {
   std::vector<int> types;
@@ -149,6 +148,7 @@ Elements read_elements(GmshSession& s, int dim, double thickness,
                                 : "triangles or quadrangles"));
   }
   Elements out;
+  std::unordered_map<std::size_t, std::uint32_t> corner_of_node;
   for (const int type : types) {
     std::string name;
     int type_dim = 0, order = 0, nodes_per = 0, primary = 0;
@@ -192,7 +192,13 @@ Elements read_elements(GmshSession& s, int dim, double thickness,
                        nodes.begin() + static_cast<long>((e + 1) * n));
       for (const auto& piece : simplices_of(dim, primary)) {
         for (std::size_t c = 0; c < static_cast<std::size_t>(dim) + 1; ++c) {
-          out.simplex_nodes.push_back(nodes[e * n + piece[c]]);
+          const std::size_t tag = nodes[e * n + piece[c]];
+          const auto [known, added] =
+              corner_of_node.emplace(tag, static_cast<std::uint32_t>(body.cloud.corner.size()));
+          if (added) {
+            body.cloud.corner.push_back(node.at(tag));
+          }
+          body.cloud.simplex.push_back(known->second);
         }
       }
       out.offsets.push_back(out.nodes.size());
@@ -317,15 +323,6 @@ MeshBody extract_body(GmshSession& s, int dim, double thickness) {
   }
   const Elements elements = read_elements(s, dim, thickness, node, body);
   check_orientation(s, dim, elements, body);
-  std::unordered_map<std::size_t, std::uint32_t> corner_index;
-  for (const std::size_t tag : elements.simplex_nodes) {
-    const auto [at, added] =
-        corner_index.emplace(tag, static_cast<std::uint32_t>(body.cloud.corner.size()));
-    if (added) {
-      body.cloud.corner.push_back(node.at(tag));
-    }
-    body.cloud.simplex.push_back(at->second);
-  }
   read_groups(s, dim, elements, body);
   body.warnings = std::move(s.warnings);
   return body;

@@ -22,6 +22,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace pd {
@@ -86,6 +87,15 @@ struct ParticleSet {
 
 /// Volume of one lattice cell: λ³, λ²·t (2D) or λ·A (1D).
 double cell_volume(const ModelDimension& d, double spacing);
+
+/// Lattice coordinate of index n along one axis.
+double lattice_coordinate(const LatticeSpec& l, int axis, long long n);
+
+/// Index range [first, last] of lattice points inside [lo, hi] along one axis.
+/// A point on a face counts as inside (within 1e-6 λ, against round-off in box corners). For boxes
+/// aligned with the lattice this never matters for cell-centred lattices (their points sit half a
+/// spacing from the faces); for node-based lattices it puts the nodes on the faces in the box.
+std::pair<long long, long long> index_range(const LatticeSpec& l, int axis, double lo, double hi);
 
 /// Fill the bodies with lattice particles. A point shared by two bodies goes to the first one
 /// listed (the scene checks that overlapping bodies have the same material).
