@@ -230,6 +230,120 @@ std::vector<Vec3> ghost_sites(int dim, const LatticeSpec& lattice, HorizonRule r
   return out;
 }
 
+namespace {
+
+double distance2(const Vec3& a, const Vec3& b) {
+  double d2 = 0;
+  for (std::size_t c = 0; c < 3; ++c) {
+    d2 += (a[c] - b[c]) * (a[c] - b[c]);
+  }
+  return d2;
+}
+
+/// One datum of a dependant's fit: a source seen through the symmetry planes `mask` names.
+struct Datum {
+  std::uint32_t source = 0;
+  unsigned mask = 0;
+  Vec3 at{0, 0, 0};
+};
+
+/// The data of one dependant: the cloud around each of its nearest sources, together. Every
+/// nearest source counts, not one of them chosen by index: a ghost of a hole or a notch often has
+/// several at the same distance, and a choice by index does not respect the body's symmetry (a
+/// plate with a hole on its axis deformed 0.3 % unlike its own mirror image, and unlike its half
+/// model on a symmetry plane). A cloud is the free particles within the fit radius of its nearest
+/// source and, beside symmetry planes, their mirror images within that radius (each a term of its
+/// source with the plane's normal component negated), so that a ghost beside the plane is fitted
+/// from both sides as in the full model.
+class FitCloud {
+public:
+  FitCloud(const std::vector<Vec3>& position, const BondFamily& family,
+           const std::vector<std::uint8_t>& dependent, const std::vector<SymmetryPlane>& symmetry,
+           double fit_radius, double tolerance)
+      : position_(position), family_(family), dependent_(dependent), symmetry_(symmetry),
+        fit_radius_(fit_radius), tolerance_(tolerance) {}
+
+  /// The data of the dependant at p, whose free neighbours are `near` (not empty).
+  const std::vector<Datum>& around(const Vec3& p, const std::vector<std::uint32_t>& near) {
+    nearest_.clear();
+    double best = std::numeric_limits<double>::infinity();
+    const double tied = tolerance_ * tolerance_;
+    for (const std::uint32_t j : near) {
+      const double d2 = distance2(position_[j], p);
+      if (d2 < best - tied) {
+        best = d2;
+        nearest_.clear();
+      }
+      if (d2 <= best + tied) {
+        nearest_.push_back(j);
+      }
+    }
+    data_.clear();
+    for (const std::uint32_t n : nearest_) {
+      add_cloud(n);
+    }
+    std::sort(data_.begin(), data_.end(), [](const Datum& a, const Datum& b) {
+      return std::tie(a.source, a.mask) < std::tie(b.source, b.mask);
+    });
+    data_.erase(std::unique(data_.begin(), data_.end(),
+                            [](const Datum& a, const Datum& b) {
+                              return a.source == b.source && a.mask == b.mask;
+                            }),
+                data_.end());
+    return data_;
+  }
+
+  /// The axes whose component a term through `mask` negates.
+  std::uint8_t negated_axes(unsigned mask) const {
+    std::uint8_t negated = 0;
+    for (std::size_t k = 0; k < symmetry_.size(); ++k) {
+      if (((mask >> k) & 1U) != 0) {
+        negated = static_cast<std::uint8_t>(negated ^ (1U << symmetry_[k].axis));
+      }
+    }
+    return negated;
+  }
+
+private:
+  void add_cloud(std::uint32_t nearest) {
+    const double reach2 = fit_radius_ * fit_radius_ * (1 + 1e-9);
+    const auto add = [&](std::uint32_t s) {
+      for (unsigned mask = 0; mask < (1U << symmetry_.size()); ++mask) {
+        Vec3 x = position_[s];
+        bool distinct = true; // an image across a plane the source lies on is the source
+        for (std::size_t k = 0; k < symmetry_.size(); ++k) {
+          if (((mask >> k) & 1U) != 0) {
+            const auto axis = static_cast<std::size_t>(symmetry_[k].axis);
+            distinct = distinct && std::abs(x[axis] - symmetry_[k].at) > tolerance_;
+            x[axis] = 2 * symmetry_[k].at - x[axis];
+          }
+        }
+        if (mask == 0 || (distinct && distance2(x, position_[nearest]) <= reach2)) {
+          data_.push_back({s, mask, x});
+        }
+      }
+    };
+    add(nearest);
+    for (std::size_t k = family_.offsets[nearest]; k < family_.offsets[nearest + 1]; ++k) {
+      if (!dependent_[family_.neighbour[k]] &&
+          family_.inverse_length[k] * fit_radius_ * (1 + 1e-9) >= 1.0) {
+        add(family_.neighbour[k]);
+      }
+    }
+  }
+
+  const std::vector<Vec3>& position_;
+  const BondFamily& family_;
+  const std::vector<std::uint8_t>& dependent_;
+  const std::vector<SymmetryPlane>& symmetry_;
+  double fit_radius_;
+  double tolerance_;
+  std::vector<std::uint32_t> nearest_;
+  std::vector<Datum> data_;
+};
+
+} // namespace
+
 ExtrapolatedParticles extrapolation_ties(int dim, double spacing, const std::vector<Vec3>& position,
                                          const BondFamily& family,
                                          const std::vector<std::uint8_t>& dependent,
@@ -238,16 +352,14 @@ ExtrapolatedParticles extrapolation_ties(int dim, double spacing, const std::vec
                                          const std::vector<SymmetryPlane>& symmetry) {
   ExtrapolatedParticles ties;
   const double tolerance = 1e-6 * spacing;
-  const double fit_radius = ghost_fit_radius * spacing;
-  const auto free_family = [&](std::size_t i, std::vector<std::uint32_t>& out) {
-    for (std::size_t k = family.offsets[i]; k < family.offsets[i + 1]; ++k) {
-      if (!dependent[family.neighbour[k]]) {
-        out.push_back(family.neighbour[k]);
-      }
-    }
-  };
+  // The fit is local: the free particles within the fit radius of the nearest (all of its
+  // family for a horizon shorter than that). The smaller the cloud, the fewer sources each
+  // dependant couples and the less the static solver's factor fills in (√6 λ: about 3× fewer
+  // than with δ at m = 2√3).
+  FitCloud cloud(position, family, dependent, symmetry, ghost_fit_radius * spacing, tolerance);
   std::vector<std::uint32_t> near;
-  std::vector<std::uint32_t> sources;
+  std::vector<Vec3> data_position;
+  std::vector<std::uint32_t> data_index;
   for (const std::uint32_t i : fitted) {
     ties.particle.push_back(i);
     const Vec3& p = position[i];
@@ -258,90 +370,29 @@ ExtrapolatedParticles extrapolation_ties(int dim, double spacing, const std::vec
       }
     }
     near.clear();
-    free_family(i, near);
+    for (std::size_t k = family.offsets[i]; k < family.offsets[i + 1]; ++k) {
+      if (!dependent[family.neighbour[k]]) {
+        near.push_back(family.neighbour[k]);
+      }
+    }
     if (near.empty() || behind.size() >= 3) {
       ties.offsets.push_back(ties.source.size()); // out of reach, or held on three planes: zero
       continue;
     }
-    // The nearest source (lowest index among equals, so the choice is reproducible).
-    std::uint32_t nearest = near.front();
-    double best = std::numeric_limits<double>::infinity();
-    for (std::uint32_t j : near) {
-      double d2 = 0;
-      for (std::size_t a = 0; a < 3; ++a) {
-        d2 += (position[j][a] - p[a]) * (position[j][a] - p[a]);
-      }
-      if (d2 < best - tolerance * tolerance ||
-          (std::abs(d2 - best) <= tolerance * tolerance && j < nearest)) {
-        best = std::min(best, d2);
-        nearest = j;
-      }
+    const std::vector<Datum>& data = cloud.around(p, near);
+    data_position.clear();
+    data_index.clear();
+    for (const Datum& d : data) {
+      data_index.push_back(static_cast<std::uint32_t>(data_position.size()));
+      data_position.push_back(d.at);
     }
-    // The fit is local: the free particles within the fit radius of the nearest (all of its
-    // family for a horizon shorter than that). The smaller the cloud, the fewer sources each
-    // dependant couples and the less the static solver's factor fills in (√6 λ: about 3× fewer
-    // than with δ at m = 2√3).
-    sources.assign(1, nearest);
-    for (std::size_t k = family.offsets[nearest]; k < family.offsets[nearest + 1]; ++k) {
-      if (!dependent[family.neighbour[k]] &&
-          family.inverse_length[k] * fit_radius * (1 + 1e-9) >= 1.0) {
-        sources.push_back(family.neighbour[k]);
-      }
-    }
-    std::sort(sources.begin(), sources.end());
-    if (symmetry.empty()) {
-      const Basis basis(dim, spacing, p, behind, position, sources);
-      const std::vector<double> a = fit_weights(basis, p, position, sources);
-      for (std::size_t s = 0; s < sources.size(); ++s) {
-        if (a[s] != 0.0) {
-          ties.source.push_back(sources[s]);
-          ties.coefficient.push_back(a[s]);
-          ties.negated.push_back(0);
-        }
-      }
-      ties.offsets.push_back(ties.source.size());
-      continue;
-    }
-    // The data: the sources, and their images across the symmetry planes (and across two of them,
-    // a corner) that lie within the fit radius of the nearest source.
-    std::vector<Vec3> data_position;
-    std::vector<std::uint32_t> data_source;
-    std::vector<std::uint8_t> data_negated;
-    for (const std::uint32_t s : sources) {
-      for (unsigned mask = 0; mask < (1U << symmetry.size()); ++mask) {
-        Vec3 x = position[s];
-        std::uint8_t negated = 0;
-        bool distinct = true;
-        for (std::size_t k = 0; k < symmetry.size(); ++k) {
-          if (((mask >> k) & 1U) != 0) {
-            const auto axis = static_cast<std::size_t>(symmetry[k].axis);
-            distinct = distinct && std::abs(x[axis] - symmetry[k].at) > tolerance;
-            x[axis] = 2 * symmetry[k].at - x[axis];
-            negated = static_cast<std::uint8_t>(negated ^ (1U << axis));
-          }
-        }
-        double d2 = 0;
-        for (std::size_t a = 0; a < 3; ++a) {
-          d2 += (x[a] - position[nearest][a]) * (x[a] - position[nearest][a]);
-        }
-        if (mask == 0 || (distinct && d2 <= fit_radius * fit_radius * (1 + 1e-9))) {
-          data_position.push_back(x);
-          data_source.push_back(s);
-          data_negated.push_back(negated);
-        }
-      }
-    }
-    std::vector<std::uint32_t> data(data_position.size());
-    for (std::size_t k = 0; k < data.size(); ++k) {
-      data[k] = static_cast<std::uint32_t>(k);
-    }
-    const Basis basis(dim, spacing, p, behind, data_position, data);
-    const std::vector<double> a = fit_weights(basis, p, data_position, data);
+    const Basis basis(dim, spacing, p, behind, data_position, data_index);
+    const std::vector<double> a = fit_weights(basis, p, data_position, data_index);
     for (std::size_t k = 0; k < data.size(); ++k) {
       if (a[k] != 0.0) {
-        ties.source.push_back(data_source[k]);
+        ties.source.push_back(data[k].source);
         ties.coefficient.push_back(a[k]);
-        ties.negated.push_back(data_negated[k]);
+        ties.negated.push_back(cloud.negated_axes(data[k].mask));
       }
     }
     ties.offsets.push_back(ties.source.size());
@@ -359,22 +410,15 @@ ExtrapolatedParticles refit_within(int dim, double spacing, const std::vector<Ve
                                    const std::vector<SymmetryPlane>& symmetry, double fit_radius) {
   const double tolerance = 1e-6 * spacing;
   const double reach2 = fit_radius * fit_radius * spacing * spacing * (1 + 1e-9);
-  const auto distance2 = [](const Vec3& a, const Vec3& b) {
-    double d2 = 0;
-    for (std::size_t c = 0; c < 3; ++c) {
-      d2 += (a[c] - b[c]) * (a[c] - b[c]);
-    }
-    return d2;
-  };
   ExtrapolatedParticles out;
   std::vector<Vec3> datum;       // where each term's source is seen from (its symmetry image)
-  std::vector<Vec3> kept;        // the data within the radius
+  std::vector<Vec3> kept;        // the data within the radius of a nearest datum
   std::vector<std::size_t> term; // and their terms
   for (std::size_t d = 0; d < ties.size(); ++d) {
     const Vec3& p = position[ties.particle[d]];
     out.particle.push_back(ties.particle[d]);
     datum.clear();
-    std::size_t nearest = ties.offsets[d];
+    double best = std::numeric_limits<double>::infinity();
     for (std::size_t t = ties.offsets[d]; t < ties.offsets[d + 1]; ++t) {
       Vec3 x = position[ties.source[t]];
       for (const SymmetryPlane& s : symmetry) {
@@ -384,16 +428,17 @@ ExtrapolatedParticles refit_within(int dim, double spacing, const std::vector<Ve
         }
       }
       datum.push_back(x);
-      if (distance2(x, p) <
-          distance2(datum[nearest - ties.offsets[d]], p) - tolerance * tolerance) {
-        nearest = t;
-      }
+      best = std::min(best, distance2(x, p));
     }
+    // Every nearest datum counts (see FitCloud), so that the refit respects the body's symmetry.
     kept.clear();
     term.clear();
     for (std::size_t t = ties.offsets[d]; t < ties.offsets[d + 1]; ++t) {
       const Vec3& x = datum[t - ties.offsets[d]];
-      if (distance2(x, datum[nearest - ties.offsets[d]]) <= reach2) {
+      const bool within = std::any_of(datum.begin(), datum.end(), [&](const Vec3& n) {
+        return distance2(n, p) <= best + tolerance * tolerance && distance2(x, n) <= reach2;
+      });
+      if (within) {
         kept.push_back(x);
         term.push_back(t);
       }

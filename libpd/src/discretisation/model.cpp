@@ -2,6 +2,7 @@
 
 #include "libpd/discretisation/bond_cuts.hpp"
 #include "libpd/discretisation/surface_load.hpp"
+#include "symmetry_images.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -339,111 +340,6 @@ void take_material_of_nearest_body_particle(const BondFamily& family, std::size_
   }
 }
 
-/// The symmetry planes of spec's supports, each with the side the body lies on (that of the mean
-/// body particle).
-std::vector<SymmetryPlane> symmetry_planes(const ModelSpec& spec, const ParticleSet& particles,
-                                           std::size_t body_count) {
-  std::vector<SymmetryPlane> planes;
-  for (const SupportSpec& sup : spec.supports) {
-    for (std::size_t a = 0; a < 3; ++a) {
-      if (sup.symmetry[a]) {
-        double mean = 0;
-        for (std::size_t i = 0; i < body_count; ++i) {
-          mean += particles.position[i][a] - sup.symmetry_at[a];
-        }
-        planes.push_back({static_cast<int>(a), sup.symmetry_at[a], mean >= 0 ? 1.0 : -1.0});
-      }
-    }
-  }
-  return planes;
-}
-
-/// Symmetry supports: every ghost site beyond a symmetry plane (beyond several: across all of
-/// them) takes the displacement of its image with the normal components negated, instead of the
-/// quadratic fit: the image if it is a body particle, the image's own terms if it is a ghost.
-/// With these, the half model's energy is exactly half the symmetric full model's (bonds into
-/// ghosts count ½), so both have the same equilibrium. Sites without an image keep their fit.
-ExtrapolatedParticles symmetry_images(const ModelSpec& spec, const ParticleSet& particles,
-                                      std::size_t body_count,
-                                      const std::vector<SymmetryPlane>& sides,
-                                      ExtrapolatedParticles fitted) {
-  struct Plane {
-    std::size_t axis;
-    double at;
-    double side; // the body's side: sign of x_axis − at
-    Region region;
-  };
-  std::vector<Plane> planes;
-  const int dim = spec.dimension.dim;
-  const double tol = region_tolerance(spec);
-  std::size_t next = 0; // `sides` lists the planes in this order
-  for (const SupportSpec& sup : spec.supports) {
-    for (std::size_t a = 0; a < 3; ++a) {
-      if (sup.symmetry[a]) {
-        planes.push_back({a, sup.symmetry_at[a], sides[next++].side, sup.region});
-      }
-    }
-  }
-  if (planes.empty() || fitted.empty()) {
-    return fitted;
-  }
-  // Sites by lattice cell, to find an image.
-  const double h = spec.lattice.spacing;
-  const auto key = [h](const Vec3& p) {
-    return std::array<long long, 3>{std::llround(p[0] / h * 2), std::llround(p[1] / h * 2),
-                                    std::llround(p[2] / h * 2)};
-  };
-  std::map<std::array<long long, 3>, std::uint32_t> index;
-  for (std::size_t i = 0; i < particles.size(); ++i) {
-    index.emplace(key(particles.position[i]), static_cast<std::uint32_t>(i));
-  }
-  std::vector<std::ptrdiff_t> slot(particles.size(), -1); // dependant index of a particle
-  for (std::size_t d = 0; d < fitted.size(); ++d) {
-    slot[fitted.particle[d]] = static_cast<std::ptrdiff_t>(d);
-  }
-  ExtrapolatedParticles out;
-  for (std::size_t d = 0; d < fitted.size(); ++d) {
-    const std::uint32_t p = fitted.particle[d];
-    Vec3 image = particles.position[p];
-    std::uint8_t negated = 0;
-    for (const Plane& pl : planes) {
-      const bool beyond = pl.side * (image[pl.axis] - pl.at) < -tol &&
-                          (pl.region.boxes.empty() || pl.region.contains(image, dim, h));
-      if (beyond) {
-        image[pl.axis] = 2 * pl.at - image[pl.axis];
-        negated = static_cast<std::uint8_t>(negated | (1U << pl.axis));
-      }
-    }
-    const auto found = negated != 0 ? index.find(key(image)) : index.end();
-    std::size_t from = d; // whose terms p takes
-    if (found != index.end() && found->second < body_count) {
-      out.particle.push_back(p);
-      out.source.push_back(found->second);
-      out.coefficient.push_back(1.0);
-      out.negated.push_back(negated);
-      out.offsets.push_back(out.source.size());
-      continue;
-    }
-    if (found != index.end() && slot[found->second] >= 0) {
-      from = static_cast<std::size_t>(slot[found->second]);
-    } else {
-      negated = 0; // no image: the site keeps its own fit
-    }
-    out.particle.push_back(p);
-    for (std::size_t t = fitted.offsets[from]; t < fitted.offsets[from + 1]; ++t) {
-      out.source.push_back(fitted.source[t]);
-      out.coefficient.push_back(fitted.coefficient[t]);
-      const std::uint8_t own = fitted.negated.empty() ? 0 : fitted.negated[t];
-      out.negated.push_back(static_cast<std::uint8_t>(own ^ negated));
-    }
-    out.offsets.push_back(out.source.size());
-  }
-  if (std::all_of(out.negated.begin(), out.negated.end(), [](std::uint8_t n) { return n == 0; })) {
-    out.negated.clear();
-  }
-  return out;
-}
-
 /// The extrapolated dependants (ghost_layers.hpp): the ghosts, and the particles of mirror
 /// supports under `quadratic` coupling. Particles held by any constraint are never sources.
 ExtrapolatedParticles extrapolated_particles(const ModelSpec& spec, const ParticleSet& particles,
@@ -480,11 +376,11 @@ ExtrapolatedParticles extrapolated_particles(const ModelSpec& spec, const Partic
   if (fitted.empty()) {
     return {};
   }
-  const std::vector<SymmetryPlane> symmetry = symmetry_planes(spec, particles, body_count);
-  return symmetry_images(spec, particles, body_count, symmetry,
-                         extrapolation_ties(spec.dimension.dim, spec.lattice.spacing,
-                                            particles.position, family, dependent, fitted,
-                                            clamp_planes(spec), symmetry));
+  const std::vector<SymmetryPlane> symmetry = detail::symmetry_planes(spec, particles, body_count);
+  return detail::symmetry_images(
+      spec, particles, body_count, region_tolerance(spec), symmetry, constraints,
+      extrapolation_ties(spec.dimension.dim, spec.lattice.spacing, particles.position, family,
+                         dependent, fitted, clamp_planes(spec), symmetry));
 }
 
 /// The loads as force densities [N/m³] per dof (empty without loads): a resultant is shared in
@@ -793,7 +689,8 @@ Model build_model(const ModelSpec& spec, ParticleSet particles) {
 ExtrapolatedParticles refit_extrapolation(const Model& m, double fit_radius) {
   return refit_within(m.spec.dimension.dim, m.spec.lattice.spacing, m.particles.position,
                       m.extrapolated, clamp_planes(m.spec),
-                      symmetry_planes(m.spec, m.particles, m.body_particle_count()), fit_radius);
+                      detail::symmetry_planes(m.spec, m.particles, m.body_particle_count()),
+                      fit_radius);
 }
 
 } // namespace pd
