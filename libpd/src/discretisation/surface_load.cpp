@@ -29,6 +29,14 @@ long pieces(double length, double h) {
   return std::max(1L, static_cast<long>(std::ceil(length / h)));
 }
 
+/// Pieces of a whole circle of circumference `length`: a multiple of 8, so that the midpoints
+/// (at (k + ½)·2π/n) map onto each other under the lattice's mirrors (the axes and diagonals
+/// through the centre) and none lies on a mirror line, where the nearest particle is a tie. With
+/// an odd count the bore of a quarter ring was loaded 0.2 % unlike its own mirror image.
+long pieces_around(double length, double h) {
+  return 8 * std::max(1L, static_cast<long>(std::ceil(length / (8 * h))));
+}
+
 /// The two axes other than `axis` in 3D (in 2D: x and y).
 std::array<std::size_t, 2> across(int axis) {
   return {axis_index((axis + 1) % 3), axis_index((axis + 2) % 3)};
@@ -38,7 +46,7 @@ std::array<std::size_t, 2> across(int axis) {
 /// of length ≤ h, each standing for `depth` of the third direction (2D: the thickness).
 void sample_circle(const Vec3& c, double r, std::array<std::size_t, 2> uv, double h, double depth,
                    const SampleSink& sink) {
-  const long n = pieces(2 * std::numbers::pi * r, h);
+  const long n = pieces_around(2 * std::numbers::pi * r, h);
   for (long k = 0; k < n; ++k) {
     const double t = 2 * std::numbers::pi * (static_cast<double>(k) + 0.5) / static_cast<double>(n);
     Sample s{c, {0, 0, 0}, 2 * std::numbers::pi * r / static_cast<double>(n) * depth};
@@ -59,7 +67,7 @@ void sample_disk(const Vec3& c, double r, int w, double sign, double h, const Sa
     const double r0 = r * static_cast<double>(j) / static_cast<double>(rings);
     const double r1 = r * static_cast<double>(j + 1) / static_cast<double>(rings);
     const double rm = 0.5 * (r0 + r1);
-    const long n = pieces(2 * std::numbers::pi * rm, h);
+    const long n = pieces_around(2 * std::numbers::pi * rm, h);
     const double area = std::numbers::pi * (r1 * r1 - r0 * r0) / static_cast<double>(n);
     for (long k = 0; k < n; ++k) {
       const double t =
@@ -111,7 +119,7 @@ void sample_sphere(const Vec3& c, double r, double h, const SampleSink& sink) {
   for (long j = 0; j < bands; ++j) {
     const double z = -1 + 2 * (static_cast<double>(j) + 0.5) / static_cast<double>(bands);
     const double rho = std::sqrt(std::max(0.0, 1 - z * z));
-    const long n = pieces(2 * std::numbers::pi * r * rho, h);
+    const long n = pieces_around(2 * std::numbers::pi * r * rho, h);
     const double area = 4 * std::numbers::pi * r * r / static_cast<double>(bands * n);
     for (long k = 0; k < n; ++k) {
       const double t =
