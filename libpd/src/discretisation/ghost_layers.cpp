@@ -247,14 +247,15 @@ struct Datum {
   Vec3 at{0, 0, 0};
 };
 
-/// The data of one dependant: the cloud around each of its nearest sources, together. Every
-/// nearest source counts, not one of them chosen by index: a ghost of a hole or a notch often has
-/// several at the same distance, and a choice by index does not respect the body's symmetry (a
-/// plate with a hole on its axis deformed 0.3 % unlike its own mirror image, and unlike its half
-/// model on a symmetry plane). A cloud is the free particles within the fit radius of its nearest
-/// source and, beside symmetry planes, their mirror images within that radius (each a term of its
-/// source with the plane's normal component negated), so that a ghost beside the plane is fitted
-/// from both sides as in the full model.
+/// The data of one dependant: the free particles within the fit radius of its nearest source and,
+/// beside symmetry planes, their mirror images within that radius (each a term of its source with
+/// the plane's normal component negated), so that a ghost beside the plane is fitted from both
+/// sides as in the full model. A ghost of a hole or a notch often has several nearest sources at
+/// the same distance; its cloud is then centred on their centroid, not on the one of lowest index,
+/// which did not respect the body's symmetry (a plate with a hole on its axis deformed 0.3 %
+/// unlike its own mirror image, and unlike its half model on a symmetry plane). Centring keeps
+/// the cloud's size; the union of the sources' clouds, also symmetric, doubles some clouds and
+/// moved the Kirsch plate's hole_top_uy at 5 mm from −2.1 % to −6.3 % against FE (centred: −3.7 %).
 class FitCloud {
 public:
   FitCloud(const std::vector<Vec3>& position, const BondFamily& family,
@@ -278,9 +279,22 @@ public:
         nearest_.push_back(j);
       }
     }
+    // The cloud is centred on the nearest sources' centroid: on the source itself where there is
+    // one, between them where several are equally near.
+    Vec3 centre{0, 0, 0};
+    for (const std::uint32_t n : nearest_) {
+      for (std::size_t a = 0; a < 3; ++a) {
+        centre[a] += position_[n][a] / static_cast<double>(nearest_.size());
+      }
+    }
     data_.clear();
     for (const std::uint32_t n : nearest_) {
-      add_cloud(n);
+      add_within(n, centre);
+      for (std::size_t k = family_.offsets[n]; k < family_.offsets[n + 1]; ++k) {
+        if (!dependent_[family_.neighbour[k]]) {
+          add_within(family_.neighbour[k], centre);
+        }
+      }
     }
     std::sort(data_.begin(), data_.end(), [](const Datum& a, const Datum& b) {
       return std::tie(a.source, a.mask) < std::tie(b.source, b.mask);
@@ -305,33 +319,24 @@ public:
   }
 
 private:
-  void add_cloud(std::uint32_t nearest) {
+  /// Source s, and its images across the symmetry planes, where within the fit radius of c.
+  void add_within(std::uint32_t s, const Vec3& c) {
     const double reach2 = fit_radius_ * fit_radius_ * (1 + 1e-9);
-    const auto add = [&](std::uint32_t s) {
-      for (unsigned mask = 0; mask < (1U << symmetry_.size()); ++mask) {
-        Vec3 x = position_[s];
-        bool distinct = true; // an image across a plane the source lies on is the source
-        for (std::size_t k = 0; k < symmetry_.size(); ++k) {
-          if (((mask >> k) & 1U) != 0) {
-            const auto axis = static_cast<std::size_t>(symmetry_[k].axis);
-            distinct = distinct && std::abs(x[axis] - symmetry_[k].at) > tolerance_;
-            x[axis] = 2 * symmetry_[k].at - x[axis];
-          }
-        }
-        if (mask == 0 || (distinct && distance2(x, position_[nearest]) <= reach2)) {
-          data_.push_back({s, mask, x});
+    for (unsigned mask = 0; mask < (1U << symmetry_.size()); ++mask) {
+      Vec3 x = position_[s];
+      bool distinct = true; // an image across a plane the source lies on is the source
+      for (std::size_t k = 0; k < symmetry_.size(); ++k) {
+        if (((mask >> k) & 1U) != 0) {
+          const auto axis = static_cast<std::size_t>(symmetry_[k].axis);
+          distinct = distinct && std::abs(x[axis] - symmetry_[k].at) > tolerance_;
+          x[axis] = 2 * symmetry_[k].at - x[axis];
         }
       }
-    };
-    add(nearest);
-    for (std::size_t k = family_.offsets[nearest]; k < family_.offsets[nearest + 1]; ++k) {
-      if (!dependent_[family_.neighbour[k]] &&
-          family_.inverse_length[k] * fit_radius_ * (1 + 1e-9) >= 1.0) {
-        add(family_.neighbour[k]);
+      if ((mask == 0 || distinct) && distance2(x, c) <= reach2) {
+        data_.push_back({s, mask, x});
       }
     }
   }
-
   const std::vector<Vec3>& position_;
   const BondFamily& family_;
   const std::vector<std::uint8_t>& dependent_;
@@ -412,7 +417,7 @@ ExtrapolatedParticles refit_within(int dim, double spacing, const std::vector<Ve
   const double reach2 = fit_radius * fit_radius * spacing * spacing * (1 + 1e-9);
   ExtrapolatedParticles out;
   std::vector<Vec3> datum;       // where each term's source is seen from (its symmetry image)
-  std::vector<Vec3> kept;        // the data within the radius of a nearest datum
+  std::vector<Vec3> kept;        // the data within the radius of the nearest data
   std::vector<std::size_t> term; // and their terms
   for (std::size_t d = 0; d < ties.size(); ++d) {
     const Vec3& p = position[ties.particle[d]];
@@ -430,15 +435,25 @@ ExtrapolatedParticles refit_within(int dim, double spacing, const std::vector<Ve
       datum.push_back(x);
       best = std::min(best, distance2(x, p));
     }
-    // Every nearest datum counts (see FitCloud), so that the refit respects the body's symmetry.
+    // Centred on the nearest data's centroid, as the fit is (FitCloud).
+    Vec3 centre{0, 0, 0};
+    double nearest = 0;
+    for (const Vec3& x : datum) {
+      if (distance2(x, p) <= best + tolerance * tolerance) {
+        for (std::size_t a = 0; a < 3; ++a) {
+          centre[a] += x[a];
+        }
+        nearest += 1;
+      }
+    }
+    for (std::size_t a = 0; a < 3 && nearest > 0; ++a) {
+      centre[a] /= nearest;
+    }
     kept.clear();
     term.clear();
     for (std::size_t t = ties.offsets[d]; t < ties.offsets[d + 1]; ++t) {
       const Vec3& x = datum[t - ties.offsets[d]];
-      const bool within = std::any_of(datum.begin(), datum.end(), [&](const Vec3& n) {
-        return distance2(n, p) <= best + tolerance * tolerance && distance2(x, n) <= reach2;
-      });
-      if (within) {
+      if (distance2(x, centre) <= reach2) {
         kept.push_back(x);
         term.push_back(t);
       }

@@ -321,10 +321,10 @@ TEST(GhostLayers, RefitAtTheFullRadiusIsTheFitAndSmallerOnesStayLinearExact) {
 
 // A plate with a hole on its axis is its own mirror image, and so must be its discretisation: the
 // ghosts inside the hole have several nearest sources at the same distance, and each is fitted
-// from all of their clouds (a choice by index made the plate of plate-hole-clamped.yaml deform
-// 0.3 % unlike its mirror image). The extrapolation is linear in the field, so mirror symmetry
-// reads: the ghost at M p, fed the mirrored field x ↦ M u(M x), takes M times what the ghost at p
-// takes from u, for any field u.
+// from the cloud around their centroid (a choice by index made the plate of
+// plate-hole-clamped.yaml deform 0.3 % unlike its mirror image). The extrapolation is linear in the
+// field, so mirror symmetry reads: the ghost at M p, fed the mirrored field x ↦ M u(M x), takes M
+// times what the ghost at p takes from u, for any field u.
 TEST(GhostLayers, TheFitOfAHoleRespectsTheBodysMirrorSymmetry) {
   pd::ModelSpec spec = box_spec(2, pd::VolumeCorrection::none, 3.0);
   pd::Shape hole;

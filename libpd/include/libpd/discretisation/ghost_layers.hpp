@@ -89,15 +89,16 @@ inline constexpr double ghost_fit_radius = 2.449489742783178;
 
 /// Extrapolation coefficients for every particle listed in `fitted` (ascending), from the
 /// particles with dependent[i] = 0 (the sources; every fitted particle is dependent too): each
-/// dependant is fitted around the nearest source among its bond family, from that source and its
-/// own free neighbours within ghost_fit_radius λ, with the quadratic basis restricted by the clamp
-/// planes the dependant lies behind (see above). A dependant with no source within the horizon, or
-/// behind three planes, gets no term (its displacement stays zero). Axes along which the sources do
-/// not vary enough for a linear (two positions) or quadratic (three) term drop those terms, so thin
-/// bodies extrapolate with what they can resolve. Beside a symmetry plane the fit also takes the
-/// sources' mirror images within the fit radius of the nearest source as data (each a term of its
-/// source with the normal component negated), so that a ghost beside the plane is fitted from both
-/// sides as in the full model.
+/// dependant is fitted around the nearest source among its bond family, from the free particles
+/// within ghost_fit_radius λ of it (of the centroid of the nearest sources where several are
+/// equally near, so that a symmetric body gets symmetric fits), with the quadratic basis
+/// restricted by the clamp planes the dependant lies behind (see above). A dependant with no source
+/// within the horizon, or behind three planes, gets no term (its displacement stays zero). Axes
+/// along which the sources do not vary enough for a linear (two positions) or quadratic (three)
+/// term drop those terms, so thin bodies extrapolate with what they can resolve. Beside a symmetry
+/// plane the fit also takes the sources' mirror images within the fit radius as data (each a term
+/// of its source with the normal component negated), so that a ghost beside the plane is fitted
+/// from both sides as in the full model.
 ExtrapolatedParticles extrapolation_ties(int dim, double spacing, const std::vector<Vec3>& position,
                                          const BondFamily& family,
                                          const std::vector<std::uint8_t>& dependent,
