@@ -240,6 +240,34 @@ double distance2(const Vec3& a, const Vec3& b) {
   return d2;
 }
 
+/// The points nearest p among point_of(0 … count − 1), all within `tolerance` of the least distance
+/// (their indices in `nearest`), and their centroid: the nearest point itself, or the middle of
+/// several equally near ones. Taking all of them, not the one of lowest index, keeps the fits of a
+/// symmetric body symmetric.
+template <class PointOf>
+Vec3 nearest_centroid(std::size_t count, const PointOf& point_of, const Vec3& p, double tolerance,
+                      std::vector<std::size_t>& nearest) {
+  double best = std::numeric_limits<double>::infinity();
+  for (std::size_t k = 0; k < count; ++k) {
+    best = std::min(best, distance2(point_of(k), p));
+  }
+  nearest.clear();
+  Vec3 centre{0, 0, 0};
+  for (std::size_t k = 0; k < count; ++k) {
+    const Vec3& x = point_of(k);
+    if (distance2(x, p) <= best + tolerance * tolerance) {
+      nearest.push_back(k);
+      for (std::size_t a = 0; a < 3; ++a) {
+        centre[a] += x[a];
+      }
+    }
+  }
+  for (std::size_t a = 0; a < 3 && !nearest.empty(); ++a) {
+    centre[a] /= static_cast<double>(nearest.size());
+  }
+  return centre;
+}
+
 /// One datum of a dependant's fit: a source seen through the symmetry planes `mask` names.
 struct Datum {
   std::uint32_t source = 0;
@@ -266,33 +294,18 @@ public:
 
   /// The data of the dependant at p, whose free neighbours are `near` (not empty).
   const std::vector<Datum>& around(const Vec3& p, const std::vector<std::uint32_t>& near) {
-    nearest_.clear();
-    double best = std::numeric_limits<double>::infinity();
-    const double tied = tolerance_ * tolerance_;
-    for (const std::uint32_t j : near) {
-      const double d2 = distance2(position_[j], p);
-      if (d2 < best - tied) {
-        best = d2;
-        nearest_.clear();
-      }
-      if (d2 <= best + tied) {
-        nearest_.push_back(j);
-      }
-    }
     // The cloud is centred on the nearest sources' centroid: on the source itself where there is
     // one, between them where several are equally near.
-    Vec3 centre{0, 0, 0};
-    for (const std::uint32_t n : nearest_) {
-      for (std::size_t a = 0; a < 3; ++a) {
-        centre[a] += position_[n][a] / static_cast<double>(nearest_.size());
-      }
-    }
+    const Vec3 centre = nearest_centroid(
+        near.size(), [&](std::size_t k) -> const Vec3& { return position_[near[k]]; }, p,
+        tolerance_, nearest_);
     data_.clear();
-    for (const std::uint32_t n : nearest_) {
+    for (const std::size_t k : nearest_) {
+      const std::uint32_t n = near[k];
       add_within(n, centre);
-      for (std::size_t k = family_.offsets[n]; k < family_.offsets[n + 1]; ++k) {
-        if (!dependent_[family_.neighbour[k]]) {
-          add_within(family_.neighbour[k], centre);
+      for (std::size_t b = family_.offsets[n]; b < family_.offsets[n + 1]; ++b) {
+        if (!dependent_[family_.neighbour[b]]) {
+          add_within(family_.neighbour[b], centre);
         }
       }
     }
@@ -343,7 +356,7 @@ private:
   const std::vector<SymmetryPlane>& symmetry_;
   double fit_radius_;
   double tolerance_;
-  std::vector<std::uint32_t> nearest_;
+  std::vector<std::size_t> nearest_; // indices into the dependant's free neighbours
   std::vector<Datum> data_;
 };
 
@@ -419,11 +432,11 @@ ExtrapolatedParticles refit_within(int dim, double spacing, const std::vector<Ve
   std::vector<Vec3> datum;       // where each term's source is seen from (its symmetry image)
   std::vector<Vec3> kept;        // the data within the radius of the nearest data
   std::vector<std::size_t> term; // and their terms
+  std::vector<std::size_t> nearest;
   for (std::size_t d = 0; d < ties.size(); ++d) {
     const Vec3& p = position[ties.particle[d]];
     out.particle.push_back(ties.particle[d]);
     datum.clear();
-    double best = std::numeric_limits<double>::infinity();
     for (std::size_t t = ties.offsets[d]; t < ties.offsets[d + 1]; ++t) {
       Vec3 x = position[ties.source[t]];
       for (const SymmetryPlane& s : symmetry) {
@@ -433,22 +446,11 @@ ExtrapolatedParticles refit_within(int dim, double spacing, const std::vector<Ve
         }
       }
       datum.push_back(x);
-      best = std::min(best, distance2(x, p));
     }
     // Centred on the nearest data's centroid, as the fit is (FitCloud).
-    Vec3 centre{0, 0, 0};
-    double nearest = 0;
-    for (const Vec3& x : datum) {
-      if (distance2(x, p) <= best + tolerance * tolerance) {
-        for (std::size_t a = 0; a < 3; ++a) {
-          centre[a] += x[a];
-        }
-        nearest += 1;
-      }
-    }
-    for (std::size_t a = 0; a < 3 && nearest > 0; ++a) {
-      centre[a] /= nearest;
-    }
+    const Vec3 centre = nearest_centroid(
+        datum.size(), [&](std::size_t k) -> const Vec3& { return datum[k]; }, p, tolerance,
+        nearest);
     kept.clear();
     term.clear();
     for (std::size_t t = ties.offsets[d]; t < ties.offsets[d + 1]; ++t) {
