@@ -162,6 +162,15 @@ long MeshBodyElements::element_at(const pd::Vec3& p) const {
   return best;
 }
 
+std::string MeshBodyElements::description() const {
+  return std::string(dim == 2 ? "P2 triangles" : "P2 tetrahedra") + ": the " +
+         std::to_string(size()) + " elements of " + file +
+         (geometry ? " meshed by Gmsh at the lattice spacing" : "") +
+         (particle_element.empty() ? " (one PD particle each)"
+                                   : " (the PD particles: the lattice sites inside them)") +
+         ", split once per level" + (geometry ? ", new boundary nodes on the CAD surfaces" : "");
+}
+
 MeshBodyElements read_mesh_body_elements(const pd::BodySpec& body, const std::size_t index,
                                          const int dim, const double spacing) {
   MeshBodyElements out;

@@ -156,9 +156,14 @@ LatticeCells cells_of(const pd::ModelSpec& spec, const pd::ParticleSet& particle
 std::vector<std::uint8_t> elements_of(const MeshBodyElements& mesh,
                                       const std::vector<std::uint32_t>& members) {
   std::vector<std::uint8_t> out(mesh.size(), 0);
-  for (const std::uint32_t i : members)
-    if (i >= mesh.first_particle && i < mesh.first_particle + mesh.size())
-      out[i - mesh.first_particle] = 1;
+  for (const std::uint32_t i : members) {
+    if (i < mesh.first_particle || i >= mesh.first_particle + mesh.particles())
+      continue;
+    const std::size_t k = i - mesh.first_particle;
+    const long e = mesh.particle_element.empty() ? static_cast<long>(k) : mesh.particle_element[k];
+    if (e >= 0)
+      out[static_cast<std::size_t>(e)] = 1;
+  }
   return out;
 }
 
@@ -236,6 +241,19 @@ MeshBodyElements mesh_body_of(const pd::ModelSpec& spec, const pd::ParticleSet& 
   mesh.first_particle = static_cast<std::size_t>(first - particles.body.begin());
   const auto count = static_cast<std::size_t>(
       std::count(particles.body.begin(), particles.body.end(), static_cast<std::uint16_t>(body)));
+  if (b.fill == pd::MeshFill::lattice) {
+    // The particles are lattice sites inside the elements: each acts through the element holding
+    // it (one within a tenth of its size when a site lies on the boundary).
+    for (std::size_t k = 0; k < count; ++k) {
+      const long e = mesh.element_at(particles.position[mesh.first_particle + k]);
+      if (e < 0)
+        throw std::runtime_error("pd-fem --scene: particle " + std::to_string(k) + " of body '" +
+                                 b.name + "' lies in no element of '" + b.mesh_file +
+                                 "' read again");
+      mesh.particle_element.push_back(e);
+    }
+    return mesh;
+  }
   if (count != mesh.size())
     throw std::runtime_error("pd-fem --scene: '" + b.mesh_file + "' read again has " +
                              std::to_string(mesh.size()) + " elements, libpd made " +
@@ -316,6 +334,17 @@ std::array<long long, 3> LatticeCells::cell_of(const pd::Vec3& p) const {
   for (int a = 0; a < dim; ++a)
     c[a] = static_cast<long long>(std::floor((p[a] - origin[a]) / spacing));
   return c;
+}
+
+bool LatticeCells::touches(const pd::Vec3& p, const double tol) const {
+  for (int corner = 0; corner < (1 << dim); ++corner) {
+    pd::Vec3 q = p;
+    for (int a = 0; a < dim; ++a)
+      q[static_cast<std::size_t>(a)] += (corner >> a & 1) != 0 ? tol : -tol;
+    if (contains(q))
+      return true;
+  }
+  return false;
 }
 
 std::string SceneProblem::model_name() const {
@@ -403,6 +432,8 @@ SceneProblem translate_scene(const pd::Scene& scene) {
         if (s.region.contains(particles.position[i], dim, p.tolerance()))
           held.push_back(i);
       p.support_elements.push_back(elements_of(*p.mesh_body, held));
+      if (!p.mesh_body->particle_element.empty())
+        p.support_cells.push_back(cells_of(spec, particles, held));
     }
   // Why: a load's cells become grid planes of the tensor-product grid (nested, exact) and, for
   // region loads (layers, patches), faces of a Gmsh mesh. A point load's cells do not: many of

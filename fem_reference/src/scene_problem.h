@@ -26,6 +26,8 @@ struct LatticeCells {
 
   std::array<long long, 3> cell_of(const pd::Vec3& p) const;
   bool contains(const pd::Vec3& p) const { return cells.count(cell_of(p)) > 0; }
+  // Whether p lies in the closure of the cells: within `tol` of one of them.
+  bool touches(const pd::Vec3& p, double tol) const;
 };
 
 struct SceneLoad {
@@ -64,11 +66,20 @@ struct MeshBodyElements {
   std::string file;
   bool geometry = false;          // meshed from a geometry file at the lattice spacing
   std::size_t body = 0;           // index into SceneProblem::bodies
-  std::size_t first_particle = 0; // its particles: [first_particle, first_particle + size())
+  std::size_t first_particle = 0; // its particles: [first_particle, first_particle + particles())
   int dim = 3;
   std::vector<std::array<pd::Vec3, 4>> corners;
+  // A body filled with the lattice (pd::MeshFill::lattice): the element holding each of its
+  // particles (a lattice site), so that a region of particles acts on the elements holding
+  // them. Empty when particle k is element k.
+  std::vector<long> particle_element;
 
   std::size_t size() const { return corners.size(); }
+  std::size_t particles() const {
+    return particle_element.empty() ? corners.size() : particle_element.size();
+  }
+  // What the FE meshes are, for fe.json's domain.
+  std::string description() const;
   // The edge of the regular simplex of the elements' mean measure: a mesh file's h (a geometry
   // is meshed at λ).
   double element_size() const;
@@ -118,6 +129,9 @@ struct SceneProblem {
   // supports hold the union of their particles' elements (per support, per element).
   std::optional<MeshBodyElements> mesh_body;
   std::vector<std::vector<std::uint8_t>> support_elements;
+  // On a mesh body filled with the lattice: per support, its particles' cells (the region PD
+  // holds), which the FE holds instead of elements.
+  std::vector<LatticeCells> support_cells;
   pd::Box bounding_box;                      // of the domain
   std::array<std::vector<double>, 3> planes; // per axis: every box face of the scene (sorted)
 

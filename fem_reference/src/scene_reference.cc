@@ -249,9 +249,11 @@ void SceneReference<dim>::setup_system() {
     const pd::SupportSpec& sup = problem.supports[s];
     const bool whole_planes = sup.region.boxes.empty() && sup.region.shapes.empty();
     // On a mesh body a fixed or displaced support holds the union of its particles' elements:
-    // every node of the cells refined from them. Mirror and symmetry planes stay planes.
+    // every node of the cells refined from them; filled with the lattice, the union of its
+    // particles' lattice cells, as PD holds them. Mirror and symmetry planes stay planes.
     std::vector<std::uint8_t> in_elements;
-    const bool by_elements = on_mesh_body && !sup.mirrors() && !sup.symmetric();
+    const bool by_cells = on_mesh_body && !problem.support_cells.empty();
+    const bool by_elements = on_mesh_body && !by_cells && !sup.mirrors() && !sup.symmetric();
     if (by_elements) {
       in_elements.assign(n, 0);
       for (const auto& cell : dof_handler->active_cell_iterators())
@@ -265,7 +267,10 @@ void SceneReference<dim>::setup_system() {
     for (types::global_dof_index i = 0; i < n; ++i) {
       const pd::Vec3 p = to_vec3(points[i]);
       const unsigned int c = dof_component[i];
-      const bool in_region = by_elements ? in_elements[i] != 0 : sup.region.contains(p, dim, tol);
+      const bool in_region = by_elements                          ? in_elements[i] != 0
+                             : by_cells && !sup.mirrors() && !sup.symmetric()
+                                 ? problem.support_cells[s].touches(p, tol)
+                                 : sup.region.contains(p, dim, tol);
       bool held = false;
       double g = 0.;
       for (unsigned int a = 0; a < dim; ++a) {
@@ -489,7 +494,8 @@ bool SceneReference<dim>::load_acts(const std::size_t l,
                                     const typename DoFHandler<dim>::active_cell_iterator& cell,
                                     const pd::Vec3& x) const {
   const SceneLoad& load = problem.loads[l];
-  if (on_mesh_body)
+  // A mesh body filled with the lattice is loaded as a lattice body: over its particles' cells.
+  if (on_mesh_body && problem.mesh_body->particle_element.empty())
     return load.elements[static_cast<std::size_t>(cell_element[cell->active_cell_index()])] != 0;
   return load.cells.contains(x);
 }
@@ -672,12 +678,8 @@ void SceneReference<dim>::output_results(const double wall_time) const {
       const MeshBodyElements& m = *problem.mesh_body;
       w.value("kind", "mesh body");
       w.value("file", m.file);
-      w.value("pd_particles", static_cast<unsigned long>(m.size()));
-      w.value("description", std::string(dim == 2 ? "P2 triangles" : "P2 tetrahedra") + ": the " +
-                                 std::to_string(m.size()) + " elements of " + m.file +
-                                 (m.geometry ? " meshed by Gmsh at the lattice spacing" : "") +
-                                 " (one PD particle each), split once per level" +
-                                 (m.geometry ? ", new boundary nodes on the CAD surfaces" : ""));
+      w.value("pd_particles", static_cast<unsigned long>(m.particles()));
+      w.value("description", m.description());
     } else {
       w.value("kind", use_gmsh ? "gmsh" : "box grid");
       w.value("description",

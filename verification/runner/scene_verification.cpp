@@ -116,6 +116,9 @@ void describe_sides(const Scene& scene, const YAML::Node& fe, Json& out) {
     row["source"] = b.mesh ? std::string(b.mesh_is_geometry ? "geometry " : "mesh ") + b.mesh_file
                     : b.points ? std::string("particles")
                                : std::string("lattice");
+    if (b.mesh) {
+      row["fill"] = std::string(name_of(b.fill));
+    }
     bodies.push_back(row);
   }
   if (fe["domain"] && fe["domain"]["description"]) {

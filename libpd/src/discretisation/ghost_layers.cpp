@@ -1,5 +1,7 @@
 #include "libpd/discretisation/ghost_layers.hpp"
 
+#include "libpd/discretisation/lattice_fill.hpp"
+
 #include <Eigen/Dense>
 #include <algorithm>
 #include <array>
@@ -41,55 +43,8 @@ Site site_of(const Vec3& x, int dim, const LatticeSpec& l) {
 /// added to `sites`.
 void sites_inside_simplices(int dim, const LatticeSpec& l, const PointCloud& mesh,
                             std::unordered_set<Site, SiteHash>& sites) {
-  const auto d = static_cast<std::size_t>(dim);
-  // Barycentric coordinates within round-off of the lattice count as inside, so that a site on a
-  // face shared by two simplices is not lost to both.
-  const double tolerance = 1e-9;
-  for (std::size_t s = 0; s + d < mesh.simplex.size(); s += d + 1) {
-    std::array<Vec3, 4> c{};
-    std::array<long long, 3> first{0, 0, 0}, last{0, 0, 0};
-    for (std::size_t k = 0; k <= d; ++k) {
-      c[k] = mesh.corner[mesh.simplex[s + k]];
-    }
-    for (std::size_t a = 0; a < d; ++a) {
-      double lo = c[0][a], hi = c[0][a];
-      for (std::size_t k = 1; k <= d; ++k) {
-        lo = std::min(lo, c[k][a]);
-        hi = std::max(hi, c[k][a]);
-      }
-      std::tie(first[a], last[a]) = index_range(l, static_cast<int>(a), lo, hi);
-    }
-    // x = c0 + E b, b the barycentric coordinates of corners 1..d.
-    Eigen::Matrix3d e = Eigen::Matrix3d::Identity();
-    for (std::size_t k = 1; k <= d; ++k) {
-      for (std::size_t a = 0; a < d; ++a) {
-        e(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(k - 1)) = c[k][a] - c[0][a];
-      }
-    }
-    const Eigen::Matrix3d inverse = e.inverse();
-    Site site{0, 0, 0};
-    for (site[2] = first[2]; site[2] <= last[2]; ++site[2]) {
-      for (site[1] = first[1]; site[1] <= last[1]; ++site[1]) {
-        for (site[0] = first[0]; site[0] <= last[0]; ++site[0]) {
-          Eigen::Vector3d x = Eigen::Vector3d::Zero();
-          for (std::size_t a = 0; a < d; ++a) {
-            x(static_cast<Eigen::Index>(a)) =
-                lattice_coordinate(l, static_cast<int>(a), site[a]) - c[0][a];
-          }
-          const Eigen::Vector3d b = inverse * x;
-          double rest = 1;
-          bool inside = true;
-          for (std::size_t k = 0; k < d; ++k) {
-            inside = inside && b(static_cast<Eigen::Index>(k)) >= -tolerance;
-            rest -= b(static_cast<Eigen::Index>(k));
-          }
-          if (inside && rest >= -tolerance) {
-            sites.insert(site);
-          }
-        }
-      }
-    }
-  }
+  for_each_site_in_simplices(dim, l, mesh,
+                             [&](const Site& site, std::size_t) { sites.insert(site); });
 }
 
 /// Quadratic basis around a dependant at p, restricted by the clamp planes it lies behind.

@@ -173,6 +173,20 @@ ParticleSet generate_lattice(const ModelDimension& d, const LatticeSpec& lattice
     }
     ps.particle_size.resize(ps.position.size(), 0.0);
     for (std::size_t i = 0; i < cloud->count(); ++i) {
+      if (bodies[b].fill == MeshFill::lattice) {
+        // A site a lattice body (or an earlier filled mesh) already holds stays that body's, as
+        // where two boxes overlap.
+        std::array<long long, 3> idx{0, 0, 0};
+        const double shift = lattice.convention == LatticeConvention::cell_centered ? 0.5 : 0.0;
+        for (int a = 0; a < d.dim; ++a) {
+          const auto ua = static_cast<std::size_t>(a);
+          idx[ua] =
+              std::llround((cloud->position[i][ua] - lattice.origin[ua]) / lattice.spacing - shift);
+        }
+        if (!seen.insert(idx).second) {
+          continue;
+        }
+      }
       ps.position.push_back(cloud->position[i]);
       ps.volume.push_back(cloud->volume[i]);
       ps.body.push_back(static_cast<std::uint16_t>(b));

@@ -72,7 +72,7 @@ void require_file(const std::string& path) {
 }
 
 /// The plug-in's flat body as a MeshBody (or its error thrown), released either way.
-MeshBody take(const std::string& path, pd_mesh_body* flat) {
+MeshBody take(const std::string& path, int dim, pd_mesh_body* flat) {
   const std::unique_ptr<pd_mesh_body, void (*)(pd_mesh_body*)> owner(flat, plugin().release);
   if (flat->error) {
     if (flat->mesh_error) {
@@ -98,6 +98,9 @@ MeshBody take(const std::string& path, pd_mesh_body* flat) {
     body.cloud.corner[c] = {flat->corner[3 * c], flat->corner[3 * c + 1], flat->corner[3 * c + 2]};
   }
   body.cloud.simplex.assign(flat->simplex, flat->simplex + flat->simplex_indices);
+  body.cloud.simplex_particle.assign(
+      flat->simplex_particle,
+      flat->simplex_particle + body.cloud.simplex.size() / static_cast<std::size_t>(dim + 1));
   return body;
 }
 
@@ -105,12 +108,12 @@ MeshBody take(const std::string& path, pd_mesh_body* flat) {
 
 MeshBody read_mesh_file(const std::string& path, int dim, double thickness) {
   require_file(path);
-  return take(path, plugin().read_mesh_file(path.c_str(), dim, thickness));
+  return take(path, dim, plugin().read_mesh_file(path.c_str(), dim, thickness));
 }
 
 MeshBody mesh_geometry_file(const std::string& path, int dim, double thickness, double size) {
   require_file(path);
-  return take(path, plugin().mesh_geometry_file(path.c_str(), dim, thickness, size));
+  return take(path, dim, plugin().mesh_geometry_file(path.c_str(), dim, thickness, size));
 }
 
 #endif

@@ -200,6 +200,7 @@ Elements read_elements(GmshSession& s, int dim, double thickness,
           }
           body.cloud.simplex.push_back(known->second);
         }
+        body.cloud.simplex_particle.push_back(static_cast<std::uint32_t>(out.list.size() - 1));
       }
       out.offsets.push_back(out.nodes.size());
     }
@@ -417,6 +418,7 @@ struct FlatBody {
   std::vector<std::uint32_t> group_particle;
   std::vector<double> corner;
   std::vector<std::uint32_t> simplex;
+  std::vector<std::uint32_t> simplex_particle;
 };
 
 std::unique_ptr<FlatBody> flatten(MeshBody&& body) {
@@ -429,6 +431,7 @@ std::unique_ptr<FlatBody> flatten(MeshBody&& body) {
     out->corner.insert(out->corner.end(), {c[0], c[1], c[2]});
   }
   out->simplex = std::move(body.cloud.simplex);
+  out->simplex_particle = std::move(body.cloud.simplex_particle);
   for (auto& [name, particles] : body.groups) {
     out->names.push_back(name);
     out->group_particle.insert(out->group_particle.end(), particles.begin(), particles.end());
@@ -455,6 +458,7 @@ std::unique_ptr<FlatBody> flatten(MeshBody&& body) {
   f.corner = out->corner.data();
   f.simplex_indices = out->simplex.size();
   f.simplex = out->simplex.data();
+  f.simplex_particle = out->simplex_particle.data();
   return out;
 }
 

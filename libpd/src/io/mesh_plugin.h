@@ -27,7 +27,8 @@ struct pd_mesh_body {
   const double* corner;         ///< x, y, z of each
   std::size_t simplex_indices;  ///< (dim + 1) × the simplices the elements are cut into
   const std::uint32_t* simplex; ///< each simplex's corners: triangles (2D), tetrahedra (3D)
-  void* owner;                  ///< the plug-in's own, for release
+  const std::uint32_t* simplex_particle; ///< each simplex's element (particle)
+  void* owner;                           ///< the plug-in's own, for release
 };
 
 struct pd_mesh_plugin {
@@ -42,6 +43,6 @@ struct pd_mesh_plugin {
 const pd_mesh_plugin* libpd_mesh_plugin();
 }
 
-inline constexpr std::uint32_t pd_mesh_plugin_version = 2;
+inline constexpr std::uint32_t pd_mesh_plugin_version = 3;
 inline constexpr const char* pd_mesh_plugin_module = "libpd_gmsh.so";
 inline constexpr const char* pd_mesh_plugin_entry = "libpd_mesh_plugin";

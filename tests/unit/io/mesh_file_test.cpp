@@ -469,15 +469,16 @@ struct UniformStrain {
   double energy_density; ///< of the continuum [J/m³]
 };
 
-double energy_ratio_of_triangle_plate(const fs::path& dir, const UniformStrain& s) {
+double energy_ratio_of_triangle_plate(const fs::path& dir, const UniformStrain& s,
+                                      const std::string& fill = "elements") {
   write(dir / "plate.geo", "SetFactory(\"OpenCASCADE\");\nRectangle(1) = {0, 0, 0, 0.1, 0.05};\n"
                            "Physical Surface(\"plate\") = {1};\n");
-  const std::string path =
-      write(dir / "plate.yaml", "dimension: 2\nplane: stress\nthickness: 0.01\n"
-                                "lattice: {spacing: 0.0025}\n"
-                                "materials: {steel: {youngs_modulus: 200e9, density: 7800}}\n"
-                                "bodies: [{name: plate, material: steel, geometry: plate.geo}]\n"
-                                "solver: {integrator: static}\n");
+  const std::string path = write(
+      dir / "plate.yaml", "dimension: 2\nplane: stress\nthickness: 0.01\n"
+                          "lattice: {spacing: 0.0025}\n"
+                          "materials: {steel: {youngs_modulus: 200e9, density: 7800}}\n"
+                          "bodies: [{name: plate, material: steel, geometry: plate.geo, fill: " +
+                              fill + "}]\nsolver: {integrator: static}\n");
   pd::Model model = pd::build_model(pd::load_scene(path));
   EXPECT_GT(model.ghost_count, 0U);
   double volume = 0;
@@ -513,6 +514,66 @@ TEST_F(MeshFile, DISABLED_UnstructuredTrianglesStoreTheContinuumEnergyUnderShear
   const double e = patch_strain;
   const double w = 0.5 * patch_young / (2 * (1 + patch_nu)) * e * e; // ½Gγ²
   EXPECT_NEAR(energy_ratio_of_triangle_plate(dir, {0, 0, e / 2, w}), 1.0, 1e-3);
+}
+
+// `fill: lattice` turns the same part into lattice particles, which take the lattice's default
+// weights (gradient_weights.cpp): uniaxial stress and shear alike.
+TEST_F(MeshFile, APartFilledWithTheLatticeStoresTheContinuumEnergyUnderAnyUniformStrain) {
+  const fs::path dir = temp_folder("patch-lattice");
+  const double e = patch_strain, w = 0.5 * patch_young * e * e;
+  EXPECT_NEAR(energy_ratio_of_triangle_plate(dir, {e, -patch_nu * e, 0, w}, "lattice"), 1.0, 1e-3);
+  EXPECT_NEAR(energy_ratio_of_triangle_plate(dir, {-patch_nu * e, e, 0, w}, "lattice"), 1.0, 1e-3);
+  const double shear = 0.5 * patch_young / (2 * (1 + patch_nu)) * e * e;
+  EXPECT_NEAR(energy_ratio_of_triangle_plate(dir, {0, 0, e / 2, shear}, "lattice"), 1.0, 1e-3);
+}
+
+// The lattice sites inside a rectangle's triangles are the rectangle's lattice, ghosts and all;
+// a face group holds the sites inside the elements along the face.
+TEST_F(MeshFile, AGeometryFilledWithTheLatticeIsTheLatticeOfItsRegion) {
+  const fs::path dir = temp_folder("fill");
+  write(dir / "plate.geo", "SetFactory(\"OpenCASCADE\");\nRectangle(1) = {0, 0, 0, 0.1, 0.05};\n"
+                           "Physical Curve(\"left\") = {4};\n");
+  const std::string text = "dimension: 2\nplane: stress\nthickness: 0.01\n"
+                           "lattice: {spacing: 0.005}\n"
+                           "materials: {steel: {youngs_modulus: 200e9, density: 7800}}\n"
+                           "bodies: [{name: plate, material: steel, geometry: plate.geo, "
+                           "fill: lattice}]\n"
+                           "supports: [{name: grip, group: left, fixed: [x, y]}]\n"
+                           "solver: {integrator: static}\n";
+  const pd::Scene scene = pd::load_scene(write(dir / "plate.yaml", text));
+  EXPECT_EQ(scene.model.volume_correction, pd::ModelSpec{}.volume_correction);
+  EXPECT_EQ(scene.model.surface_correction, pd::ModelSpec{}.surface_correction);
+  EXPECT_TRUE(pd::mesh_corrections_note(scene.model).empty());
+  const pd::Model model = pd::build_model(scene);
+  std::string plain = text;
+  plain.replace(plain.find("geometry: plate.geo, fill: lattice"), 34, "box: [[0, 0], [0.1, 0.05]]");
+  plain.erase(plain.find("supports:"), plain.find("solver:") - plain.find("supports:"));
+  const pd::Model box = pd::build_model(pd::load_scene(write(dir / "box.yaml", plain)));
+  ASSERT_EQ(model.size() - model.ghost_count, 200U);
+  ASSERT_EQ(model.size(), box.size());
+  for (std::size_t i = 0; i < model.size(); ++i) {
+    for (std::size_t a = 0; a < 3; ++a) {
+      ASSERT_EQ(model.particles.position[i][a], box.particles.position[i][a]) << i;
+    }
+    ASSERT_EQ(model.particles.volume[i], box.particles.volume[i]) << i;
+  }
+  std::set<std::uint32_t> held;
+  for (const pd::Constraint& c : model.constraints) {
+    if (c.particle < model.size() - model.ghost_count) {
+      held.insert(c.particle);
+      EXPECT_LT(model.particles.position[c.particle][0], 0.0075);
+    }
+  }
+  EXPECT_GE(held.size(), 10U); // the first column at least
+
+  std::string boxed = text;
+  boxed.replace(boxed.find("geometry: plate.geo, "), 21, "box: [[0, 0], [0.1, 0.05]], ");
+  try {
+    (void)pd::load_scene(write(dir / "boxed.yaml", boxed));
+    ADD_FAILURE() << "'fill' on a box body was accepted";
+  } catch (const pd::SceneError& e) {
+    EXPECT_TRUE(contains(e.what(), "'fill' applies to 'mesh' and 'geometry' bodies")) << e.what();
+  }
 }
 
 TEST_F(MeshFile, PhysicalGroupsAreSceneRegionsAndMeshBodiesTakeLatticeFreeCorrections) {

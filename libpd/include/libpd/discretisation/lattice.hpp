@@ -39,6 +39,27 @@ struct EnumName<LatticeConvention> {
   }};
 };
 
+/// What a mesh or geometry body's particles are (docs/scenes.md, meshes).
+enum class MeshFill { elements, lattice };
+
+template <>
+struct EnumName<MeshFill> {
+  static constexpr NameTable<MeshFill, 2> table{{
+      {"elements", MeshFill::elements,
+       "one particle per element at its centroid with its volume (an unstructured set)"},
+      {"lattice", MeshFill::lattice,
+       "the lattice sites inside the elements (the lattice's weights and accuracy)"},
+  }};
+};
+
+/// The `fill` of a body a scene gives as `mesh: FILE`: the user's own elements, as the peers take
+/// them (Peridigm, PeriLab).
+inline constexpr MeshFill mesh_file_fill = MeshFill::elements;
+/// The `fill` of a body given as `geometry: FILE` (CAD): the lattice, whose weights and ghost
+/// layers make it as accurate as a box body; one particle per element of Gmsh's mesh bends a
+/// part two elements deep 30–36 % too stiffly (lattice_fill.hpp, fem_reference/README.md).
+inline constexpr MeshFill geometry_file_fill = MeshFill::lattice;
+
 struct LatticeSpec {
   double spacing = 0;                               ///< λ [m]
   double horizon_factor = 2.0 * 1.7320508075688772; ///< m = δ/λ; default 2√3 (Miranda §4)
@@ -68,6 +89,10 @@ struct BodySpec {
   /// reference builds its domain from the same file.
   std::string mesh_file;
   bool mesh_is_geometry = false; ///< `mesh_file` is a geometry file meshed at lattice.spacing
+  /// A mesh body's particles: its elements, or the lattice sites inside them (then `points` are
+  /// lattice points and the body takes the lattice's corrections; lattice_fill.hpp). Unless the
+  /// scene says: mesh_file_fill or geometry_file_fill.
+  MeshFill fill = MeshFill::elements;
 
   bool operator==(const BodySpec&) const = default;
 };

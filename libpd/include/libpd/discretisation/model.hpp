@@ -132,10 +132,11 @@ struct ModelSpec {
   VolumeCorrection volume_correction = VolumeCorrection::gradient;
   MirrorCoupling mirror_coupling = MirrorCoupling::quadratic;
 
-  /// Whether a body is a mesh's elements (BodySpec::mesh): an unstructured set.
+  /// Whether a body is a mesh's elements (BodySpec::mesh, filled with its elements): an
+  /// unstructured set.
   bool has_mesh_body() const {
     for (const BodySpec& b : bodies) {
-      if (b.mesh) {
+      if (b.mesh && b.fill == MeshFill::elements) {
         return true;
       }
     }

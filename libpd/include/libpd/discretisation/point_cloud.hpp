@@ -20,6 +20,7 @@ struct PointCloud {
   /// Empty for particle files.
   std::vector<Vec3> corner;
   std::vector<std::uint32_t> simplex;
+  std::vector<std::uint32_t> simplex_particle; ///< each simplex's element (its particle here)
 
   std::size_t count() const { return position.size(); }
 };

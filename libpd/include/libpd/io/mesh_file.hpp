@@ -5,7 +5,8 @@
 // thickness). Any element type Gmsh knows counts: tetrahedra, hexahedra, prisms and pyramids in
 // 3D, triangles and quadrangles in 2D, of any order; volumes and centroids are Gauss sums of the
 // element's own Jacobian. A geometry file (.geo, .step, .iges, .brep, .stl) is first meshed by
-// Gmsh with elements no larger than a given size.
+// Gmsh with elements no larger than a given size. (A scene may fill the elements with lattice
+// sites instead, the default for geometry files: discretisation/lattice_fill.hpp.)
 //
 // Physical groups name sets of particles: a group of the body's dimension holds the particles of
 // its elements; a group of lower dimension (faces, edges, points) holds the particles whose

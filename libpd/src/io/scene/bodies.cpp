@@ -3,6 +3,7 @@
 #include "libpd/core/memory.hpp"
 #include "libpd/core/plugin.hpp"
 #include "libpd/discretisation/graded_set.hpp"
+#include "libpd/discretisation/lattice_fill.hpp"
 #include "libpd/io/mesh_file.hpp"
 #include "libpd/io/particle_file.hpp"
 #include "sections.hpp"
@@ -122,11 +123,24 @@ constexpr Key body_keys[] = {
     {.name = "geometry",
      .type = Type::string,
      .doc = "instead of box: a geometry file (.geo, .step, .iges, .brep; 3D also a closed .stl) "
-            "meshed by Gmsh with elements no larger than lattice.spacing, then read as 'mesh'",
+            "meshed by Gmsh with elements no larger than lattice.spacing, then filled as 'fill' "
+            "says",
      .example = "part.step",
      .need = Need::one_of,
      .group = 1,
      .show = Show::commented},
+    {.name = "fill",
+     .type = Type::choice,
+     .doc = "what a 'mesh' or 'geometry' body's particles are: its elements, or the lattice "
+            "sites inside them (lattice.spacing apart; a physical group holds the sites inside "
+            "its elements)",
+     .choices = enum_words<MeshFill>,
+     .show = Show::commented,
+     .bind = {.default_text =
+                  [] {
+                    return std::string(name_of(geometry_file_fill)) + " for 'geometry', " +
+                           std::string(name_of(mesh_file_fill)) + " for 'mesh'";
+                  }}},
     {.name = "graded",
      .type = Type::section,
      .doc = "instead of box: a generated graded particle set (Olsson et al. 2021, §10.2); 2D, "
@@ -203,6 +217,34 @@ void read_mesh_body(Reader& r, const Fields& f, const ModelSpec& model, BodySpec
   }
   for (const std::string& w : mesh.warnings) {
     r.warn(e->at(), w);
+  }
+  body.fill = f.has("fill") ? static_cast<MeshFill>(*r.choice(f, "fill"))
+              : meshed      ? mesh_file_fill
+                            : geometry_file_fill;
+  if (body.fill == MeshFill::lattice) {
+    // The sites inside the elements become the particles; a group holds the sites inside its
+    // elements (a face group: inside the layer of elements along the face).
+    LatticeFill filled = fill_with_lattice(model.dimension, model.lattice, mesh.cloud);
+    if (filled.cloud.count() == 0) {
+      r.fail(e->at(),
+             fmt::format("'{}' holds no lattice site: the part is thinner than lattice.spacing "
+                         "({} m)",
+                         path.string(), model.lattice.spacing),
+             "reduce lattice.spacing, or use 'fill: elements'");
+    }
+    std::vector<std::vector<std::uint32_t>> sites_of(mesh.cloud.count());
+    for (std::size_t s = 0; s < filled.element.size(); ++s) {
+      sites_of[filled.element[s]].push_back(static_cast<std::uint32_t>(s));
+    }
+    for (auto& [name, particles] : mesh.groups) {
+      std::vector<std::uint32_t> sites;
+      for (const std::uint32_t p : particles) {
+        sites.insert(sites.end(), sites_of[p].begin(), sites_of[p].end());
+      }
+      std::sort(sites.begin(), sites.end());
+      particles = std::move(sites);
+    }
+    mesh.cloud = std::move(filled.cloud);
   }
   for (const auto& [name, particles] : mesh.groups) {
     std::vector<Vec3>& points = r.mesh_groups[name];
@@ -328,6 +370,12 @@ void read_bodies(Reader& r, ModelSpec& model, Marks& marks) {
              suggestion(material, material_names, "materials defined"));
     }
     body.material = static_cast<int>(found - material_names.begin());
+    if (const Entry* fill = f.find("fill");
+        fill != nullptr && !f.has("mesh") && !f.has("geometry")) {
+      r.fail(fill->name,
+             fmt::format("body '{}': 'fill' applies to 'mesh' and 'geometry' bodies", body.name),
+             "remove 'fill': a box or shape body is filled with the lattice already");
+    }
     if (f.has("particles") || f.has("graded") || f.has("mesh") || f.has("geometry")) {
       const char* key = f.has("particles") ? "particles"
                         : f.has("graded")  ? "graded"
