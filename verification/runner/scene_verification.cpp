@@ -244,8 +244,12 @@ Json verify_scene(const std::filesystem::path& scene_path, const Context& ctx,
     row["fe_error_estimate"] = estimate;
     row["fe_relative_error_estimate"] = estimate / std::abs(v_fe);
     rows.push_back(row);
-    fmt::print("   {:<20} {:>15.8g} {:>15.8g} {:>+9.3f}% {:>11.3g}%\n", p.name, v_pd, v_fe,
-               100 * relative, 100 * estimate / std::abs(v_fe));
+    // One FE level (the next would not fit in memory, or --fe-levels 1) has no estimate.
+    const std::string shown = std::isfinite(estimate)
+                                  ? fmt::format("{:>11.3g}%", 100 * estimate / std::abs(v_fe))
+                                  : fmt::format("{:>12}", "none");
+    fmt::print("   {:<20} {:>15.8g} {:>15.8g} {:>+9.3f}% {}\n", p.name, v_pd, v_fe, 100 * relative,
+               shown);
   }
   fmt::print("   PD {:.2f} s ({} particles), FE {:.2f} s\n",
              pd.setup_seconds + pd.result.wall_seconds, pd.particles, fe_wall);
