@@ -105,6 +105,17 @@ Json probe_row(const ProbeSpec& p) {
   return row;
 }
 
+/// One probe's line of the table: PD, FE, their difference and the FE's own error estimate
+/// (none when the FE ran on one level: the next would not fit in memory, or --fe-levels 1).
+void print_probe_row(const std::string& name, double v_pd, double v_fe, double relative,
+                     double estimate) {
+  const std::string shown = std::isfinite(estimate)
+                                ? fmt::format("{:>11.3g}%", 100 * estimate / std::abs(v_fe))
+                                : fmt::format("{:>12}", "none");
+  fmt::print("   {:<20} {:>15.8g} {:>15.8g} {:>+9.3f}% {}\n", name, v_pd, v_fe, 100 * relative,
+             shown);
+}
+
 /// What each side made of the scene: PD's bodies (a mesh body names its file) and the FE's
 /// domain and meshes, as fe.json states them, so a verdict says which continuum it compares.
 void describe_sides(const Scene& scene, const YAML::Node& fe, Json& out) {
@@ -244,12 +255,7 @@ Json verify_scene(const std::filesystem::path& scene_path, const Context& ctx,
     row["fe_error_estimate"] = estimate;
     row["fe_relative_error_estimate"] = estimate / std::abs(v_fe);
     rows.push_back(row);
-    // One FE level (the next would not fit in memory, or --fe-levels 1) has no estimate.
-    const std::string shown = std::isfinite(estimate)
-                                  ? fmt::format("{:>11.3g}%", 100 * estimate / std::abs(v_fe))
-                                  : fmt::format("{:>12}", "none");
-    fmt::print("   {:<20} {:>15.8g} {:>15.8g} {:>+9.3f}% {}\n", p.name, v_pd, v_fe, 100 * relative,
-               shown);
+    print_probe_row(p.name, v_pd, v_fe, relative, estimate);
   }
   fmt::print("   PD {:.2f} s ({} particles), FE {:.2f} s\n",
              pd.setup_seconds + pd.result.wall_seconds, pd.particles, fe_wall);
