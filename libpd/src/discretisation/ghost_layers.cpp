@@ -26,19 +26,6 @@ struct SiteHash {
   }
 };
 
-double lattice_shift(const LatticeSpec& l) {
-  return l.convention == LatticeConvention::cell_centered ? 0.5 : 0.0;
-}
-
-/// The lattice site a particle belongs to (its position rounded to the lattice).
-Site site_of(const Vec3& x, int dim, const LatticeSpec& l) {
-  Site s{0, 0, 0};
-  for (std::size_t a = 0; a < static_cast<std::size_t>(dim); ++a) {
-    s[a] = std::llround((x[a] - l.origin[a]) / l.spacing - lattice_shift(l));
-  }
-  return s;
-}
-
 /// Every lattice site whose centre lies in one of `mesh`'s simplices (on a face counts as in),
 /// added to `sites`.
 void sites_inside_simplices(int dim, const LatticeSpec& l, const PointCloud& mesh,
@@ -150,7 +137,7 @@ std::vector<Vec3> ghost_sites(int dim, const LatticeSpec& lattice, HorizonRule r
   occupied.reserve(body.size());
   for (std::size_t i = 0; i < body.size(); ++i) {
     if (body_of.empty() || mesh_of_body.empty() || mesh_of_body[body_of[i]] == nullptr) {
-      occupied.insert(site_of(body[i], dim, lattice));
+      occupied.insert(nearest_lattice_site(lattice, dim, body[i]));
     }
   }
   for (const PointCloud* mesh : mesh_of_body) {
@@ -160,7 +147,7 @@ std::vector<Vec3> ghost_sites(int dim, const LatticeSpec& lattice, HorizonRule r
   }
   std::unordered_set<Site, SiteHash> ghosts;
   for (const Vec3& x : body) {
-    const Site base = site_of(x, dim, lattice);
+    const Site base = nearest_lattice_site(lattice, dim, x);
     for_each_offset_within(lattice.horizon_factor, dim, rule, [&](const Site& o) {
       const Site s{base[0] + o[0], base[1] + o[1], base[2] + o[2]};
       if (!occupied.contains(s)) {

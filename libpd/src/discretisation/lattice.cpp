@@ -26,6 +26,15 @@ double lattice_coordinate(const LatticeSpec& l, int axis, long long n) {
   return l.origin[axis] + (static_cast<double>(n) + shift) * l.spacing;
 }
 
+std::array<long long, 3> nearest_lattice_site(const LatticeSpec& l, int dim, const Vec3& x) {
+  const double shift = l.convention == LatticeConvention::cell_centered ? 0.5 : 0.0;
+  std::array<long long, 3> s{0, 0, 0};
+  for (std::size_t a = 0; a < static_cast<std::size_t>(dim); ++a) {
+    s[a] = std::llround((x[a] - l.origin[a]) / l.spacing - shift);
+  }
+  return s;
+}
+
 std::pair<long long, long long> index_range(const LatticeSpec& l, int axis, double lo, double hi) {
   const double shift = l.convention == LatticeConvention::cell_centered ? 0.5 : 0.0;
   const double tol = 1e-6;
@@ -176,14 +185,7 @@ ParticleSet generate_lattice(const ModelDimension& d, const LatticeSpec& lattice
       if (bodies[b].fill == MeshFill::lattice) {
         // A site a lattice body (or an earlier filled mesh) already holds stays that body's, as
         // where two boxes overlap.
-        std::array<long long, 3> idx{0, 0, 0};
-        const double shift = lattice.convention == LatticeConvention::cell_centered ? 0.5 : 0.0;
-        for (int a = 0; a < d.dim; ++a) {
-          const auto ua = static_cast<std::size_t>(a);
-          idx[ua] =
-              std::llround((cloud->position[i][ua] - lattice.origin[ua]) / lattice.spacing - shift);
-        }
-        if (!seen.insert(idx).second) {
+        if (!seen.insert(nearest_lattice_site(lattice, d.dim, cloud->position[i])).second) {
           continue;
         }
       }

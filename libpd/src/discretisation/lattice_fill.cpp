@@ -78,8 +78,7 @@ LatticeFill fill_with_lattice(const ModelDimension& dimension, const LatticeSpec
   });
   LatticeFill out;
   out.cloud.corner = mesh.corner;
-  out.cloud.simplex = mesh.simplex;
-  out.cloud.simplex_particle.clear(); // the sites are not the elements any more
+  out.cloud.simplex = mesh.simplex; // simplex_particle stays empty: the sites are not elements
   const double volume = cell_volume(dimension, lattice.spacing);
   // Axes beyond the dimension keep the mesh's own coordinate (0 for a plane mesh).
   const Vec3 unused = mesh.position.empty() ? Vec3{0, 0, 0} : mesh.position.front();

@@ -116,6 +116,10 @@ double cell_volume(const ModelDimension& d, double spacing);
 /// Lattice coordinate of index n along one axis.
 double lattice_coordinate(const LatticeSpec& l, int axis, long long n);
 
+/// The lattice site nearest x: its indices along the first `dim` axes (the inverse of
+/// lattice_coordinate), 0 along the others.
+std::array<long long, 3> nearest_lattice_site(const LatticeSpec& l, int dim, const Vec3& x);
+
 /// Index range [first, last] of lattice points inside [lo, hi] along one axis.
 /// A point on a face counts as inside (within 1e-6 λ, against round-off in box corners). For boxes
 /// aligned with the lattice this never matters for cell-centred lattices (their points sit half a
