@@ -31,10 +31,17 @@
 // each snapping bond releases into its neighbours (dissipated dynamically or by the static
 // solver's break events), which a global energy balance counts and a sum over bonds does not.
 //
-// Scope: two dimensions (plane stress and plane strain give the same factor, the computation is
-// scale-free, so it depends only on m, the horizon rule and the corrections). It is cached per
-// configuration; a computation takes about a second. In 1D there is no crack tip, and the 3D
-// factor is not derived yet (lattice_toughness_ratio returns nullopt for both).
+// Every particle of the square holds the bonds of a bulk particle of the user's model (its
+// stencil, read off the centre of a small model built with the user's weights and corrections):
+// the square stands for an unbounded body, so no surface treatment acts in it.
+//
+// Scope: two and three dimensions. In 3D the tip is a straight front along z in plane strain,
+// the 2D square's particles are columns of the cubic lattice, and each bond of the 3D stencil
+// joins two columns, stretched by the in-plane part of its direction; the front breaks uniformly
+// along z (a bond breaks in every layer at once). Plane stress and plane strain give the same 2D
+// factor; the computation is scale-free, so it depends only on the dimension, m, the horizon rule
+// and the corrections. It is cached per configuration; a computation takes about a second in 2D
+// and a few in 3D. In 1D there is no crack tip (lattice_toughness_ratio returns nullopt).
 #include "libpd/discretisation/model.hpp"
 
 #include <Eigen/Dense>
@@ -48,6 +55,7 @@
 #include <numbers>
 #include <stdexcept>
 #include <tuple>
+#include <utility>
 #include <vector>
 
 namespace pd {
@@ -87,11 +95,11 @@ std::array<double, 2> mode_one(double x, double y, double k, double mu, double k
   return {f * c * (kappa - 1 + 2 * s * s), f * s * (kappa + 1 - 2 * c * c)};
 }
 
-/// The square of half-width r_box around a tip at the origin, the crack along y = 0 behind it,
-/// in the user's lattice (m, rule) and corrections, at λ = 1 and E = 1 (the ratio is scale-free).
-ModelSpec boundary_layer_spec(const ModelSpec& user, double r_box) {
+/// A square (2D) or cube (3D) of half-width `half` centred on the origin in the user's lattice
+/// (m, rule) and corrections, at λ = 1 and E = 1 (the ratio is scale-free).
+ModelSpec calibration_spec(const ModelSpec& user, double half) {
   ModelSpec spec;
-  spec.dimension.dim = 2;
+  spec.dimension.dim = user.dimension.dim;
   spec.dimension.plane = user.dimension.plane;
   spec.dimension.thickness = 1;
   spec.lattice.spacing = 1;
@@ -105,12 +113,104 @@ ModelSpec boundary_layer_spec(const ModelSpec& user, double r_box) {
   m.youngs_modulus = 1;
   m.density = 1;
   spec.materials = {m};
-  BodySpec square;
-  square.name = "square";
-  square.region = Region{{Box{{-r_box, -r_box, 0}, {r_box, r_box, 0}}}};
-  spec.bodies = {square};
-  spec.cracks = {Crack{"tip", {{-r_box - 1, 0, 0}, {0, 0, 0}}}};
+  BodySpec body;
+  body.name = "calibration";
+  const double z = spec.dimension.dim == 3 ? half : 0;
+  body.region = Region{{Box{{-half, -half, -z}, {half, half, z}}}};
+  spec.bodies = {body};
   return spec;
+}
+
+/// One bond of a bulk particle: its lattice offset and its pair stiffness per unit stretch,
+/// ½(V_i C_ij + V_j C_ji) (the kernel's force on i per unit stretch is V_i C_ij; the mean of the
+/// two directions keeps K symmetric where a correction is not).
+struct StencilBond {
+  Vec3 offset;
+  double stiffness = 0;
+};
+
+/// The bonds of the particle at the centre of a cube (square in 2D) large enough that its family
+/// and its neighbours' families lie inside: what every particle away from surfaces and cracks
+/// holds, with the user's weights and corrections as build_model makes them. (A surface treatment
+/// that scales a bond by both ends' factors must not see the cube's surface from the centre's
+/// neighbours, hence two horizons.)
+std::vector<StencilBond> bulk_stencil(const ModelSpec& user) {
+  const double half = 2 * std::ceil(user.lattice.horizon_factor) + 1.5; // particles at integers
+  const Model model = build_model(calibration_spec(user, half));
+  const auto& x = model.particles.position;
+  const auto& fam = model.family;
+  std::size_t centre = 0;
+  for (std::size_t p = 1; p < model.body_particle_count(); ++p) {
+    if (norm(x[p]) < norm(x[centre])) {
+      centre = p;
+    }
+  }
+  const std::vector<std::size_t> reverse = reverse_bond_index(fam);
+  const auto stiffness = [&](std::size_t k) { return bond_stiffness(model, k); };
+  std::vector<StencilBond> stencil;
+  for (std::size_t k = fam.offsets[centre]; k < fam.offsets[centre + 1]; ++k) {
+    const std::uint32_t j = fam.neighbour[k];
+    if (stiffness(k) == 0) {
+      continue;
+    }
+    const Vec3 o{std::round(x[j][0] - x[centre][0]), std::round(x[j][1] - x[centre][1]),
+                 std::round(x[j][2] - x[centre][2])};
+    stencil.push_back({o, 0.5 * (model.particles.volume[centre] * stiffness(k) +
+                                 model.particles.volume[j] * stiffness(reverse[k]))});
+  }
+  return stencil;
+}
+
+/// The boundary-layer problem's particles (λ = 1) and pairs, each pair once.
+struct Layer {
+  std::vector<Vec3> position;
+  std::vector<Pair> pairs;
+};
+
+/// The square of half-width r_box (an integer) around a tip at the origin, the crack along y = 0
+/// behind it, one particle per cell, every particle holding the bulk stencil. In 3D each particle
+/// stands for a column along z of a front that is straight and plane-strained (u_z = 0): a bond
+/// to another layer joins the two columns, stretched by the in-plane part of its direction. A
+/// bond is cut if it crosses y = 0 and both ends lie over the crack (x < 0), the pre-crack rule
+/// of bond_cuts.cpp. Stencil bonds that stay in their column never stretch and are left out.
+Layer stencil_layer(const std::vector<StencilBond>& stencil, double r_box) {
+  const auto n = static_cast<long long>(r_box);
+  const long long side = 2 * n;
+  Layer layer;
+  for (long long b = 0; b < side; ++b) {
+    for (long long a = 0; a < side; ++a) {
+      layer.position.push_back(
+          {static_cast<double>(a - n) + 0.5, static_cast<double>(b - n) + 0.5, 0});
+    }
+  }
+  for (long long b = 0; b < side; ++b) {
+    for (long long a = 0; a < side; ++a) {
+      const auto i = static_cast<std::uint32_t>(b * side + a);
+      for (const StencilBond& s : stencil) {
+        const auto ox = static_cast<long long>(s.offset[0]);
+        const auto oy = static_cast<long long>(s.offset[1]);
+        if (ox < 0 || (ox == 0 && oy <= 0)) {
+          continue; // the other end holds it, or it stays in its column
+        }
+        if (a + ox >= side || b + oy < 0 || b + oy >= side) {
+          continue;
+        }
+        const auto j = static_cast<std::uint32_t>((b + oy) * side + a + ox);
+        const Vec3& xi = layer.position[i];
+        const Vec3& xj = layer.position[j];
+        if (xi[1] * xj[1] < 0 && xi[0] < 0 && xj[0] < 0) {
+          continue;
+        }
+        const double length = norm(s.offset);
+        layer.pairs.push_back({i,
+                               j,
+                               s.stiffness / length,
+                               {s.offset[0] / length, s.offset[1] / length, s.offset[2] / length},
+                               length});
+      }
+    }
+  }
+  return layer;
 }
 
 /// The boundary-layer problem: unknowns inside the band, the band held at the K field of a tip at
@@ -119,21 +219,24 @@ ModelSpec boundary_layer_spec(const ModelSpec& user, double r_box) {
 /// and factorised again every `refactor_every` breaks.
 class BoundaryLayer {
 public:
-  BoundaryLayer(const Model& model, double inner_half_width, double horizon)
-      : model_(model), crack_zone_half_width_(horizon) {
-    const auto& x = model.particles.position;
-    unknown_.assign(model.body_particle_count(), -1);
-    for (std::size_t p = 0; p < unknown_.size(); ++p) {
-      if (std::max(std::abs(x[p][0]), std::abs(x[p][1])) < inner_half_width) {
+  BoundaryLayer(Layer layer, double inner_half_width, double horizon)
+      : position_(std::move(layer.position)), crack_zone_half_width_(horizon) {
+    unknown_.assign(position_.size(), -1);
+    for (std::size_t p = 0; p < position_.size(); ++p) {
+      if (std::max(std::abs(position_[p][0]), std::abs(position_[p][1])) < inner_half_width) {
         unknown_[p] = n_free_++;
       }
     }
-    collect_pairs();
+    for (const Pair& b : layer.pairs) {
+      if (unknown_[b.i] >= 0 || unknown_[b.j] >= 0) {
+        pairs_.push_back(b); // only pairs that touch an unknown enter K
+      }
+    }
     broken_.assign(pairs_.size(), 0);
     for (std::size_t q = 0; q < pairs_.size(); ++q) {
       const Pair& b = pairs_[q];
       if (unknown_[b.i] >= 0 && unknown_[b.j] >= 0 &&
-          std::abs(x[b.i][1] + x[b.j][1]) < 2 * crack_zone_half_width_) {
+          std::abs(position_[b.i][1] + position_[b.j][1]) < 2 * crack_zone_half_width_) {
         breakable_.push_back(q);
       }
     }
@@ -142,7 +245,7 @@ public:
 
   /// The tip: the cell face behind the farthest particle that a break has reached (0 before any).
   double tip() const {
-    const auto& x = model_.particles.position;
+    const auto& x = position_;
     double farthest = 0;
     for (const std::size_t q : breakable_) {
       if (broken_[q]) {
@@ -155,7 +258,7 @@ public:
   /// Equilibrium with the band at the K field (K, μ, κ) of a tip at `tip`.
   Eigen::VectorXd solve(double tip, double k, double mu, double kappa) {
     if (tip != solved_tip_ || solved_generation_ != generation_) {
-      const auto& x = model_.particles.position;
+      const auto& x = position_;
       Eigen::VectorXd f = Eigen::VectorXd::Zero(size());
       for (const auto& [row, p, comp, value] : kfp_) {
         const auto u = mode_one(x[p][0] - tip, x[p][1], k, mu, kappa);
@@ -236,39 +339,6 @@ private:
 
   Eigen::Index size() const { return 2 * static_cast<Eigen::Index>(n_free_); }
 
-  void collect_pairs() {
-    const auto& fam = model_.family;
-    const auto& x = model_.particles.position;
-    const auto& volume = model_.particles.volume;
-    const std::vector<std::size_t> reverse = reverse_bond_index(fam);
-    const auto stiffness = [&](std::size_t k) {
-      return model_.field.bond_stiffness.empty() ? model_.field.stiffness
-                                                 : model_.field.bond_stiffness[k];
-    };
-    for (std::size_t i = 0; i < unknown_.size(); ++i) {
-      for (std::size_t k = fam.offsets[i]; k < fam.offsets[i + 1]; ++k) {
-        const std::uint32_t j = fam.neighbour[k];
-        if (stiffness(k) == 0 || (j >= unknown_.size() && unknown_[i] < 0)) {
-          continue; // weightless, or a band particle's bond into a ghost
-        }
-        if (j >= unknown_.size()) {
-          throw std::logic_error("lattice toughness: a free particle reaches a ghost");
-        }
-        if (j <= i || (unknown_[i] < 0 && unknown_[j] < 0)) {
-          continue; // each pair once, and only pairs that touch an unknown
-        }
-        Pair b{static_cast<std::uint32_t>(i), j, 0, {0, 0, 0}, 0};
-        b.length = std::hypot(x[j][0] - x[i][0], x[j][1] - x[i][1]);
-        b.n = {(x[j][0] - x[i][0]) / b.length, (x[j][1] - x[i][1]) / b.length, 0};
-        // Force on i per unit stretch is V_i C_ij n (the kernel's force density times V_i); the
-        // mean of the two directions keeps K symmetric where a correction is not.
-        b.stiffness =
-            0.5 * (volume[i] * stiffness(k) + volume[j] * stiffness(reverse[k])) / b.length;
-        pairs_.push_back(b);
-      }
-    }
-  }
-
   /// K on the unknowns without the broken pairs, and its coupling to the band (V-scaled rows).
   void refactor() {
     std::vector<Eigen::Triplet<double>> kff;
@@ -309,7 +379,7 @@ private:
     ++generation_;
   }
 
-  const Model& model_;
+  std::vector<Vec3> position_;
   double crack_zone_half_width_; ///< δ: pairs whose midpoint is nearer y = 0 may break
   std::vector<int> unknown_;
   int n_free_ = 0;
@@ -326,24 +396,23 @@ private:
   int generation_ = 0, solved_generation_ = -1;
 };
 
-} // namespace
-
-double lattice_toughness_ratio_in(const ModelSpec& user) {
-  if (user.dimension.dim != 2) {
-    throw std::logic_error("lattice_toughness_ratio_in: 2D only");
-  }
-  const double delta = user.lattice.horizon_factor; // at λ = 1
+/// The ratio for a lattice whose bulk particles hold `stencil`, in `user_dimension` (its plane
+/// mode in 2D; a 3D front is plane-strained), at m = `delta` spacings.
+double ratio_of_stencil(const std::vector<StencilBond>& stencil,
+                        const ModelDimension& user_dimension, double delta) {
   const double r_box = std::ceil(half_width_in_horizons * delta);
-  const Model model = build_model(boundary_layer_spec(user, r_box));
-  BoundaryLayer layer(model, r_box - (std::ceil(delta) + 1), delta);
-
-  const double nu = *bond_based_poisson_ratio(model.spec.dimension);
-  const bool plane_strain = model.spec.dimension.plane == PlaneMode::plane_strain;
+  BoundaryLayer layer(stencil_layer(stencil, r_box), r_box - (std::ceil(delta) + 1), delta);
+  ModelDimension dimension = user_dimension;
+  if (dimension.dim == 3) {
+    dimension.plane = PlaneMode::plane_strain; // the front's columns do not move along z
+  }
+  const double nu = *bond_based_poisson_ratio(user_dimension);
+  const bool plane_strain = dimension.plane == PlaneMode::plane_strain;
   const double g0 = 1;
   const double k_ic = std::sqrt((plane_strain ? 1 / (1 - nu * nu) : 1.0) * g0);
   const double mu = 1 / (2 * (1 + nu));
   const double kappa = plane_strain ? 3 - 4 * nu : (3 - nu) / (1 + nu);
-  const double s0 = critical_stretch_from_fracture_energy(model.spec.dimension, 1, delta, g0);
+  const double s0 = critical_stretch_from_fracture_energy(user_dimension, 1, delta, g0);
 
   std::vector<double> largest(periods, 0.0);
   for (;;) {
@@ -362,29 +431,49 @@ double lattice_toughness_ratio_in(const ModelSpec& user) {
   return *std::max_element(largest.begin() + steady_from, largest.end());
 }
 
-std::optional<double> lattice_toughness_ratio(const ModelSpec& spec) {
-  if (spec.dimension.dim != 2) {
-    return std::nullopt;
+} // namespace
+
+double lattice_toughness_ratio_in(const ModelSpec& user) {
+  if (user.dimension.dim != 2 && user.dimension.dim != 3) {
+    throw std::logic_error("lattice_toughness_ratio_in: 2D and 3D only");
   }
-  using Key = std::tuple<double, int, int, int>;
-  const Key key{spec.lattice.horizon_factor, static_cast<int>(spec.horizon_rule),
-                static_cast<int>(spec.surface_correction),
-                static_cast<int>(spec.volume_correction)};
+  return ratio_of_stencil(bulk_stencil(user), user.dimension, user.lattice.horizon_factor);
+}
+
+std::optional<double> lattice_toughness_ratio(const ModelSpec& spec) {
+  if (spec.dimension.dim == 1) {
+    return std::nullopt; // no crack tip
+  }
+  // In 2D plane stress whatever the scene's plane: the factor is the same in plane strain (a unit
+  // test holds them to 1e-3), and one computation per lattice keeps the cache independent of
+  // order. In 3D the front is plane-strained whatever the plane says.
+  ModelSpec plane_stress = spec;
+  plane_stress.dimension.plane = PlaneMode::plane_stress;
+  // The ratio is a function of the bulk stencil alone, so configurations that differ only where
+  // the square has no particles (the surface treatments) share one computation; stiffnesses
+  // enter the key to 12 digits, as some treatments reach the bulk value only to round-off.
+  const std::vector<StencilBond> stencil = bulk_stencil(plane_stress);
+  double stiffest = 0;
+  for (const StencilBond& b : stencil) {
+    stiffest = std::max(stiffest, b.stiffness);
+  }
+  std::vector<double> key{static_cast<double>(spec.dimension.dim), spec.lattice.horizon_factor};
+  for (const StencilBond& b : stencil) {
+    key.insert(key.end(),
+               {b.offset[0], b.offset[1], b.offset[2], std::round(1e12 * b.stiffness / stiffest)});
+  }
   static std::mutex mutex;
-  static std::map<Key, double> cache;
+  static std::map<std::vector<double>, double> cache;
   {
     const std::lock_guard lock(mutex);
     if (const auto found = cache.find(key); found != cache.end()) {
       return found->second;
     }
   }
-  // Plane stress whatever the scene's plane: the factor is the same in plane strain (a unit test
-  // holds them to 1e-3), and one computation per lattice keeps the cache independent of order.
-  ModelSpec plane_stress = spec;
-  plane_stress.dimension.plane = PlaneMode::plane_stress;
-  const double ratio = lattice_toughness_ratio_in(plane_stress);
+  const double ratio =
+      ratio_of_stencil(stencil, plane_stress.dimension, spec.lattice.horizon_factor);
   const std::lock_guard lock(mutex);
-  cache.emplace(key, ratio);
+  cache.emplace(std::move(key), ratio);
   return ratio;
 }
 

@@ -79,10 +79,10 @@ std::vector<MaterialConstants> material_constants(const ModelSpec& spec) {
   std::vector<MaterialConstants> out;
   const double delta = spec.lattice.horizon();
   // s0 from G0 (eq. 11 and its 2D forms) makes the energy stored at s0 across a plane G0. In 2D
-  // it is divided by the lattice's toughness ratio (lattice_toughness.cpp), so that a crack runs
-  // at K_Ic = √(E' G0) whatever the weights and m. Elsewhere: `gradient` weights store `ratio`
-  // times the energy in the bonds crossing a plane, so s0/√ratio keeps that energy what the
-  // uniform lattice releases (the 3D toughness ratio is not derived yet). Explicit s0 stays.
+  // and 3D it is divided by the lattice's toughness ratio (lattice_toughness.cpp), so that a
+  // crack runs at K_Ic = √(E' G0) whatever the weights and m. In 1D (no crack tip) `gradient`
+  // weights store `ratio` times the energy in the bonds crossing a plane, so s0/√ratio keeps that
+  // energy what the uniform lattice releases. Explicit s0 stays.
   double stretch_scale = 1.0;
   for (const Material& m : spec.materials) {
     if (!m.critical_stretch && m.fracture_energy && spec.effects.damage &&

@@ -782,40 +782,10 @@ TEST(GradientWeights, CentreParticleStoresTheCellEnergy) {
 }
 
 TEST(GradientWeights, FractureRatioMatchesABruteForceCount) {
-  // Energy per unit area to break every bond crossing the plane z = 6 of a 12³ block (m = 2√3),
-  // counted over the bonds of the centre column: ½ k_ij V_i s0² |ξ| per bond, over λ². With
-  // `gradient` weights and s0 scaled by 1/√ratio it is what the unweighted lattice (`none`)
-  // releases with the unscaled s0: G0 times the lattice's quadrature of ∫_{ξ_z>0} ξ_z |ξ| dV =
-  // πδ⁵/5 (the s0 of eq. 11 is calibrated to the integral), 1.0206 at m = 2√3.
-  const double g0 = 100.0, m = 2.0 * std::sqrt(3.0);
-  const auto released = [&](pd::VolumeCorrection vc) {
-    pd::ModelSpec spec = block_spec(3, m, {12, 12, 12});
-    spec.materials[0].fracture_energy = g0;
-    spec.effects.damage = true;
-    spec.volume_correction = vc;
-    const pd::Model model = pd::build_model(spec);
-    double sum = 0;
-    for (std::size_t i = 0; i < model.size(); ++i) {
-      const pd::Vec3& x = model.particles.position[i];
-      if (std::abs(x[0] - 5.5) > 1e-9 || std::abs(x[1] - 5.5) > 1e-9 || x[2] > 6) {
-        continue;
-      }
-      for (std::size_t k = model.family.offsets[i]; k < model.family.offsets[i + 1]; ++k) {
-        const std::size_t j = model.family.neighbour[k];
-        if (model.particles.position[j][2] < 6) {
-          continue;
-        }
-        // `none` has a uniform field (one stiffness, one s0), `gradient` a per-bond one.
-        const bool per_bond = model.field.per_bond();
-        const double s0 =
-            per_bond ? model.field.bond_critical_stretch[k] : model.field.critical_stretch;
-        const double stiffness = per_bond ? model.field.bond_stiffness[k] : model.field.stiffness;
-        sum +=
-            0.5 * stiffness * model.particles.volume[i] * s0 * s0 / model.family.inverse_length[k];
-      }
-    }
-    return sum;
-  };
+  // The share of the crossing energy ∫_{ξ_z>0} ξ_z |ξ| dV that `gradient` weights keep, over the
+  // lattice offsets of m = 2√3 in 3D, against a brute-force count. (1D scales s0 by it; 2D and 3D
+  // divide s0 by the lattice toughness ratio instead, lattice_toughness_test.cpp.)
+  const double m = 2.0 * std::sqrt(3.0);
   const pd::CorrectionSpec spec = gradient_spec(3, pd::PlaneMode::plane_stress, m, 1.0);
   const double ratio = pd::fracture_energy_weight_ratio(spec);
   // Brute-force ratio over the lattice offsets with ξ_z > 0.
@@ -833,10 +803,6 @@ TEST(GradientWeights, FractureRatioMatchesABruteForceCount) {
     }
   }
   EXPECT_NEAR(ratio, weighted / plain, 1e-12);
-  EXPECT_NEAR(released(pd::VolumeCorrection::gradient) / released(pd::VolumeCorrection::none), 1.0,
-              1e-10);
-  EXPECT_NEAR(released(pd::VolumeCorrection::gradient) / g0, plain / (pi * std::pow(m, 5) / 5),
-              1e-10);
 }
 
 // ---- scene keys -------------------------------------------------------------------------------

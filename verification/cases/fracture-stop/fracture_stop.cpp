@@ -149,9 +149,54 @@ Json run_fracture_stop_convergence(const Context& ctx) {
   return out;
 }
 
+const char* scene_3d_path = "user/fracture-centre-crack-3d.yaml";
+
+/// The plate of fracture-stop built in 3D, one spacing thick (a thin plate in plane stress): its
+/// failure stress against the Griffith load of the 2D plate (the thin plate's limit), which holds
+/// the 3D toughness ratio (lattice_toughness.cpp) to the same gate as the 2D one.
+Json run_fracture_stop_3d(const Context& ctx) {
+  const auto start = std::chrono::steady_clock::now();
+  Json out;
+  out["case"] = "fracture-stop-3d";
+  out["quantity"] = "failure load of the fracture-stop plate built in 3D, one spacing thick";
+  const Scene s = load_scene((ctx.scenes_dir / scene_3d_path).string());
+  const auto twin_file = ctx.scenes_dir / scene_path;
+  const Scene twin = load_scene(twin_file.string());
+  const Box& plate = s.model.bodies.at(0).region.boxes.at(0);
+  const Box& twin_plate = twin.model.bodies.at(0).region.boxes.at(0);
+  if (plate.lo[0] != twin_plate.lo[0] || plate.hi[0] != twin_plate.hi[0] ||
+      plate.hi[1] != twin_plate.hi[1] || crack_half_length(s) != crack_half_length(twin)) {
+    throw std::runtime_error("fracture-stop-3d: the 3D plate is not the 2D plate of " +
+                             std::string(scene_path));
+  }
+  const RunOutcome r = run_case_scene(ctx, s, "fracture-stop-3d");
+  out["status"] = to_string(r.result.status);
+  out["message"] = r.result.message;
+  const Reference ref = griffith_reference(ctx, twin_file, twin);
+  record_reference(out, ref);
+  const double area = (plate.hi[0] - plate.lo[0]) * (plate.hi[2] - plate.lo[2]);
+  const double stress = r.stop_peak / area;
+  out["failure_load"] = r.stop_peak;
+  out["failure_stress"] = stress;
+  out["error"] = stress / ref.griffith - 1;
+  out["error_against_feddersen"] = stress / ref.feddersen - 1;
+  fmt::print("   status {}: {}\n   failure stress {:.4g} MPa, Griffith for the 2D plate (FE "
+             "compliance) {:.4g} MPa: {:+.1f} % (Feddersen's long plate {:.4g} MPa: {:+.1f} %)\n",
+             to_string(r.result.status), r.result.message, stress / 1e6, ref.griffith / 1e6,
+             100 * (stress / ref.griffith - 1), ref.feddersen / 1e6,
+             100 * (stress / ref.feddersen - 1));
+  finish_case(out,
+              "the run ends with status failed (solver.stop_when) and the failure stress is "
+              "within 5 % of Griffith's for the 2D plate (FE compliance)",
+              r.result.status == RunStatus::failed && relative_error(stress, ref.griffith) <= 0.05,
+              start);
+  return out;
+}
+
 } // namespace
 
 PD_VERIFICATION_RUN("fracture-stop", run_fracture_stop);
+PD_VERIFICATION_RUN("fracture-stop-3d", run_fracture_stop_3d);
 PD_VERIFICATION_RUN("fracture-stop-convergence", run_fracture_stop_convergence);
 
 } // namespace pd::verification

@@ -278,11 +278,12 @@ Model build_model(const ModelSpec& spec);
 /// The lattice's toughness ratio (src/discretisation/lattice_toughness.cpp): the K at which a
 /// straight crack along a lattice axis runs in `spec`'s lattice with its corrections, over
 /// √(E' G0) (E' = E in plane stress, E/(1 − ν²) in plane strain), for the energy-derived s0
-/// (critical_stretch_from_fracture_energy); 2D s0 from G0 is divided by it. Computed in plane
-/// stress and cached per (m, horizon rule, corrections); nullopt outside 2D (not derived yet).
+/// (critical_stretch_from_fracture_energy); s0 from G0 is divided by it. Computed in plane
+/// stress in 2D, for a plane-strained straight front in 3D, and cached per (dimension, m, horizon
+/// rule, corrections); nullopt in 1D (no crack tip).
 std::optional<double> lattice_toughness_ratio(const ModelSpec& spec);
 
-/// The computation behind it in `spec`'s own plane mode, not cached (2D only).
+/// The computation behind it in `spec`'s own plane mode (2D) or in plane strain (3D), not cached.
 double lattice_toughness_ratio_in(const ModelSpec& spec);
 /// The same on particles already generated from spec's dimension, lattice and bodies.
 Model build_model(const ModelSpec& spec, ParticleSet particles);
