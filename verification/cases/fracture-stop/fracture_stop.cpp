@@ -12,10 +12,13 @@
 
 #include <chrono>
 #include <cmath>
+#include <filesystem>
 #include <fmt/format.h>
+#include <fstream>
 #include <stdexcept>
 #include <utility>
 #include <vector>
+#include <yaml-cpp/yaml.h>
 
 namespace pd::verification {
 
@@ -29,16 +32,20 @@ struct Reference {
 };
 
 Reference griffith_reference(const Context& ctx, const std::filesystem::path& scene_file,
-                             const Scene& s) {
+                             const Scene& s, const std::string& fe_folder = "fe-compliance") {
   Reference ref;
   const double width = s.model.bodies.at(0).region.boxes.at(0).hi[0];
   ref.area = width * s.model.dimension.thickness;
   const double a = crack_half_length(s);
   const Material& m = s.model.materials.at(0);
   // Feddersen: K_I = σ √(π a) F(a/W), F = √(sec(π a / W)) (Tada's handbook, within 0.3 % for
-  // a/W ≤ 0.35), plane stress, so σ_f = √(E G / (π a)) / F.
+  // a/W ≤ 0.35), so σ_f = √(E' G / (π a)) / F (E' = E in plane stress, E/(1 − ν²) in plane strain).
   const double pi = 3.141592653589793;
-  ref.infinite = std::sqrt(m.youngs_modulus * m.fracture_energy.value_or(0) / (pi * a));
+  const double nu = bond_based_poisson_ratio(s.model.dimension).value_or(0);
+  const double e_prime = s.model.dimension.plane == PlaneMode::plane_strain
+                             ? m.youngs_modulus / (1 - nu * nu)
+                             : m.youngs_modulus;
+  ref.infinite = std::sqrt(e_prime * m.fracture_energy.value_or(0) / (pi * a));
   ref.feddersen = ref.infinite / std::sqrt(1 / std::cos(pi * a / width));
   const auto grip = [&](const char* name) {
     for (const SupportSpec& support : s.model.supports) {
@@ -49,7 +56,7 @@ Reference griffith_reference(const Context& ctx, const std::filesystem::path& sc
     throw std::runtime_error(std::string("fracture-stop: the scene has no support ") + name);
   };
   ref.fe = griffith_load_from_fe_compliance(scene_file, s, "force", grip("top") - grip("bottom"),
-                                            ctx.output_dir / "fe-compliance");
+                                            ctx.output_dir / fe_folder);
   ref.griffith = ref.fe.failure_load / ref.area;
   return ref;
 }
@@ -149,30 +156,46 @@ Json run_fracture_stop_convergence(const Context& ctx) {
   return out;
 }
 
-const char* scene_3d_path = "user/fracture-centre-crack-3d.yaml";
+/// The 2D plate of fracture-stop in plane strain, written into the output folder: the reference of
+/// the 3D plates, whose one layer of particles has no strain through its thickness (ν = 1/4 in
+/// both).
+std::filesystem::path plane_strain_twin(const Context& ctx, const std::string& run) {
+  YAML::Node scene = YAML::LoadFile((ctx.scenes_dir / scene_path).string());
+  scene["plane"] = "strain";
+  scene["title"] = "fracture-stop's plate in plane strain (the reference of fracture-stop-3d)";
+  std::filesystem::create_directories(ctx.output_dir);
+  const auto path = ctx.output_dir / (run + "-plane-strain-twin.yaml");
+  std::ofstream file(path);
+  file << scene << "\n";
+  if (!file) {
+    throw std::runtime_error("fracture-stop-3d: cannot write " + path.string());
+  }
+  return path;
+}
 
-/// The plate of fracture-stop built in 3D, one spacing thick (a thin plate in plane stress): its
-/// failure stress against the Griffith load of the 2D plate (the thin plate's limit), which holds
-/// the 3D toughness ratio (lattice_toughness.cpp) to the same gate as the 2D one.
-Json run_fracture_stop_3d(const Context& ctx) {
+/// A plate of fracture-stop built in 3D, one spacing thick, against the Griffith load of the 2D
+/// plate in plane strain (its FE compliance): the check of the 3D toughness ratio
+/// (lattice_toughness.cpp), measured on a straight front in plane strain.
+Json run_fracture_stop_3d(const Context& ctx, const char* name, const char* scene_file) {
   const auto start = std::chrono::steady_clock::now();
   Json out;
-  out["case"] = "fracture-stop-3d";
+  out["case"] = name;
   out["quantity"] = "failure load of the fracture-stop plate built in 3D, one spacing thick";
-  const Scene s = load_scene((ctx.scenes_dir / scene_3d_path).string());
-  const auto twin_file = ctx.scenes_dir / scene_path;
+  const Scene s = load_scene((ctx.scenes_dir / scene_file).string());
+  const auto twin_file = plane_strain_twin(ctx, name);
   const Scene twin = load_scene(twin_file.string());
   const Box& plate = s.model.bodies.at(0).region.boxes.at(0);
   const Box& twin_plate = twin.model.bodies.at(0).region.boxes.at(0);
   if (plate.lo[0] != twin_plate.lo[0] || plate.hi[0] != twin_plate.hi[0] ||
       plate.hi[1] != twin_plate.hi[1] || crack_half_length(s) != crack_half_length(twin)) {
-    throw std::runtime_error("fracture-stop-3d: the 3D plate is not the 2D plate of " +
-                             std::string(scene_path));
+    throw std::runtime_error(std::string(name) + ": the 3D plate is not the 2D plate of " +
+                             scene_path);
   }
-  const RunOutcome r = run_case_scene(ctx, s, "fracture-stop-3d");
+  const RunOutcome r = run_case_scene(ctx, s, name);
   out["status"] = to_string(r.result.status);
   out["message"] = r.result.message;
-  const Reference ref = griffith_reference(ctx, twin_file, twin);
+  const Reference ref =
+      griffith_reference(ctx, twin_file, twin, std::string(name) + "-fe-compliance");
   record_reference(out, ref);
   const double area = (plate.hi[0] - plate.lo[0]) * (plate.hi[2] - plate.lo[2]);
   const double stress = r.stop_peak / area;
@@ -180,23 +203,34 @@ Json run_fracture_stop_3d(const Context& ctx) {
   out["failure_stress"] = stress;
   out["error"] = stress / ref.griffith - 1;
   out["error_against_feddersen"] = stress / ref.feddersen - 1;
-  fmt::print("   status {}: {}\n   failure stress {:.4g} MPa, Griffith for the 2D plate (FE "
-             "compliance) {:.4g} MPa: {:+.1f} % (Feddersen's long plate {:.4g} MPa: {:+.1f} %)\n",
+  fmt::print("   status {}: {}\n   failure stress {:.4g} MPa, Griffith for the 2D plate in plane "
+             "strain (FE compliance) {:.4g} MPa: {:+.1f} % (Feddersen's long plate {:.4g} MPa: "
+             "{:+.1f} %)\n",
              to_string(r.result.status), r.result.message, stress / 1e6, ref.griffith / 1e6,
              100 * (stress / ref.griffith - 1), ref.feddersen / 1e6,
              100 * (stress / ref.feddersen - 1));
   finish_case(out,
               "the run ends with status failed (solver.stop_when) and the failure stress is "
-              "within 5 % of Griffith's for the 2D plate (FE compliance)",
+              "within 5 % of Griffith's for the 2D plate in plane strain (FE compliance)",
               r.result.status == RunStatus::failed && relative_error(stress, ref.griffith) <= 0.05,
               start);
   return out;
 }
 
+Json run_fracture_stop_3d_free(const Context& ctx) {
+  return run_fracture_stop_3d(ctx, "fracture-stop-3d", "user/fracture-centre-crack-3d.yaml");
+}
+
+Json run_fracture_stop_3d_slab(const Context& ctx) {
+  return run_fracture_stop_3d(ctx, "fracture-stop-3d-slab",
+                              "user/fracture-centre-crack-3d-slab.yaml");
+}
+
 } // namespace
 
 PD_VERIFICATION_RUN("fracture-stop", run_fracture_stop);
-PD_VERIFICATION_RUN("fracture-stop-3d", run_fracture_stop_3d);
+PD_VERIFICATION_RUN("fracture-stop-3d", run_fracture_stop_3d_free);
+PD_VERIFICATION_RUN("fracture-stop-3d-slab", run_fracture_stop_3d_slab);
 PD_VERIFICATION_RUN("fracture-stop-convergence", run_fracture_stop_convergence);
 
 } // namespace pd::verification
