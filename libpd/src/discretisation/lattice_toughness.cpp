@@ -449,6 +449,24 @@ std::optional<double> lattice_toughness_ratio(const ModelSpec& spec) {
   // order. In 3D the front is plane-strained whatever the plane says.
   ModelSpec plane_stress = spec;
   plane_stress.dimension.plane = PlaneMode::plane_stress;
+  // What calibration_spec takes from the scene: a model built again with the same settings finds
+  // its ratio without building the stencil's cube again.
+  using Settings = std::tuple<int, double, int, int, int, int>;
+  const Settings settings{spec.dimension.dim,
+                          spec.lattice.horizon_factor,
+                          static_cast<int>(spec.horizon_rule),
+                          static_cast<int>(spec.surface_correction),
+                          static_cast<int>(spec.volume_correction),
+                          static_cast<int>(spec.mirror_coupling)};
+  static std::mutex mutex;
+  static std::map<Settings, double> by_settings;
+  static std::map<std::vector<double>, double> by_stencil;
+  {
+    const std::lock_guard lock(mutex);
+    if (const auto found = by_settings.find(settings); found != by_settings.end()) {
+      return found->second;
+    }
+  }
   // The ratio is a function of the bulk stencil alone, so configurations that differ only where
   // the square has no particles (the surface treatments) share one computation; stiffnesses
   // enter the key to 12 digits, as some treatments reach the bulk value only to round-off.
@@ -462,18 +480,18 @@ std::optional<double> lattice_toughness_ratio(const ModelSpec& spec) {
     key.insert(key.end(),
                {b.offset[0], b.offset[1], b.offset[2], std::round(1e12 * b.stiffness / stiffest)});
   }
-  static std::mutex mutex;
-  static std::map<std::vector<double>, double> cache;
   {
     const std::lock_guard lock(mutex);
-    if (const auto found = cache.find(key); found != cache.end()) {
+    if (const auto found = by_stencil.find(key); found != by_stencil.end()) {
+      by_settings.emplace(settings, found->second);
       return found->second;
     }
   }
   const double ratio =
       ratio_of_stencil(stencil, plane_stress.dimension, spec.lattice.horizon_factor);
   const std::lock_guard lock(mutex);
-  cache.emplace(std::move(key), ratio);
+  by_stencil.emplace(std::move(key), ratio);
+  by_settings.emplace(settings, ratio);
   return ratio;
 }
 

@@ -16,6 +16,7 @@
 #include <fmt/format.h>
 #include <fstream>
 #include <stdexcept>
+#include <string>
 #include <utility>
 #include <vector>
 #include <yaml-cpp/yaml.h>
@@ -73,6 +74,31 @@ void record_reference(Json& out, const Reference& ref) {
   out["fe_crack_step"] = ref.fe.crack_step;
 }
 
+/// The verdict of a run pulled to failure: its peak grip force over `area` against `ref`, recorded
+/// in `out`, printed, and gated at 5 %. `against` names the reference in the text.
+void record_failure(Json& out, const RunOutcome& r, const Reference& ref, double area,
+                    const std::string& against, std::chrono::steady_clock::time_point start) {
+  out["status"] = to_string(r.result.status);
+  out["message"] = r.result.message;
+  record_reference(out, ref);
+  const double stress = r.stop_peak / area;
+  out["failure_load"] = r.stop_peak;
+  out["failure_stress"] = stress;
+  out["error"] = stress / ref.griffith - 1;
+  out["error_against_feddersen"] = stress / ref.feddersen - 1;
+  fmt::print("   status {}: {}\n   failure stress {:.4g} MPa, Griffith for {} (FE compliance) "
+             "{:.4g} MPa: {:+.1f} % (Feddersen's long plate {:.4g} MPa: {:+.1f} %)\n",
+             to_string(r.result.status), r.result.message, stress / 1e6, against,
+             ref.griffith / 1e6, 100 * (stress / ref.griffith - 1), ref.feddersen / 1e6,
+             100 * (stress / ref.feddersen - 1));
+  finish_case(out,
+              "the run ends with status failed (solver.stop_when) and the failure stress is "
+              "within 5 % of Griffith's for " +
+                  against + " (FE compliance)",
+              r.result.status == RunStatus::failed && relative_error(stress, ref.griffith) <= 0.05,
+              start);
+}
+
 const char* scene_path = "user/fracture-centre-crack.yaml";
 
 Json run_fracture_stop(const Context& ctx) {
@@ -85,25 +111,8 @@ Json run_fracture_stop(const Context& ctx) {
   // The scene loads the plate quasi-statically (static with damage), so its failure load is that
   // of equilibrium states and depends on neither a ramp rate nor the number of load levels.
   const RunOutcome r = run_case_scene(ctx, s, "fracture-stop");
-  out["status"] = to_string(r.result.status);
-  out["message"] = r.result.message;
   const Reference ref = griffith_reference(ctx, scene_file, s);
-  record_reference(out, ref);
-  const double stress = r.stop_peak / ref.area;
-  out["failure_load"] = r.stop_peak;
-  out["failure_stress"] = stress;
-  out["error"] = stress / ref.griffith - 1;
-  out["error_against_feddersen"] = stress / ref.feddersen - 1;
-  fmt::print("   status {}: {}\n   failure stress {:.4g} MPa, Griffith for this plate (FE "
-             "compliance) {:.4g} MPa: {:+.1f} % (Feddersen's long plate {:.4g} MPa: {:+.1f} %)\n",
-             to_string(r.result.status), r.result.message, stress / 1e6, ref.griffith / 1e6,
-             100 * (stress / ref.griffith - 1), ref.feddersen / 1e6,
-             100 * (stress / ref.feddersen - 1));
-  finish_case(out,
-              "the run ends with status failed (solver.stop_when) and the failure stress is "
-              "within 5 % of Griffith's for this plate (FE compliance)",
-              r.result.status == RunStatus::failed && relative_error(stress, ref.griffith) <= 0.05,
-              start);
+  record_failure(out, r, ref, ref.area, "this plate", start);
   return out;
 }
 
@@ -192,28 +201,10 @@ Json run_fracture_stop_3d(const Context& ctx, const char* name, const char* scen
                              scene_path);
   }
   const RunOutcome r = run_case_scene(ctx, s, name);
-  out["status"] = to_string(r.result.status);
-  out["message"] = r.result.message;
   const Reference ref =
       griffith_reference(ctx, twin_file, twin, std::string(name) + "-fe-compliance");
-  record_reference(out, ref);
   const double area = (plate.hi[0] - plate.lo[0]) * (plate.hi[2] - plate.lo[2]);
-  const double stress = r.stop_peak / area;
-  out["failure_load"] = r.stop_peak;
-  out["failure_stress"] = stress;
-  out["error"] = stress / ref.griffith - 1;
-  out["error_against_feddersen"] = stress / ref.feddersen - 1;
-  fmt::print("   status {}: {}\n   failure stress {:.4g} MPa, Griffith for the 2D plate in plane "
-             "strain (FE compliance) {:.4g} MPa: {:+.1f} % (Feddersen's long plate {:.4g} MPa: "
-             "{:+.1f} %)\n",
-             to_string(r.result.status), r.result.message, stress / 1e6, ref.griffith / 1e6,
-             100 * (stress / ref.griffith - 1), ref.feddersen / 1e6,
-             100 * (stress / ref.feddersen - 1));
-  finish_case(out,
-              "the run ends with status failed (solver.stop_when) and the failure stress is "
-              "within 5 % of Griffith's for the 2D plate in plane strain (FE compliance)",
-              r.result.status == RunStatus::failed && relative_error(stress, ref.griffith) <= 0.05,
-              start);
+  record_failure(out, r, ref, area, "the 2D plate in plane strain", start);
   return out;
 }
 
