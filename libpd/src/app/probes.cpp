@@ -168,11 +168,19 @@ double von_mises(const Tensor& s) {
 
 namespace {
 
-/// The body particle nearest x; ties go to the lowest index so the choice is reproducible.
+/// The body particle nearest x; ties go to the lowest index so the choice is reproducible. A cut
+/// cell whose site lies outside its body (lattice.hpp) is passed over: a value read there has no
+/// counterpart in the continuum the FE reference solves.
 std::uint32_t nearest_particle(const Model& model, const Vec3& x) {
   double best = std::numeric_limits<double>::max();
   std::uint32_t arg = 0;
+  const int dim = model.spec.dimension.dim;
+  const double tol = 1e-6 * model.spec.lattice.spacing;
   for (std::size_t i = 0; i < model.body_particle_count(); ++i) {
+    const BodySpec& body = model.spec.bodies[model.particles.body[i]];
+    if (!body.points && !body.region.contains(model.particles.position[i], dim, tol)) {
+      continue;
+    }
     double d2 = 0;
     for (int c = 0; c < 3; ++c) {
       const double d = model.particles.position[i][c] - x[c];

@@ -9,12 +9,38 @@ namespace pd {
 
 namespace {
 
+/// Whether p lies inside the lattice cell centred on x (not on its faces).
+bool in_cell(const Vec3& p, const Vec3& x, int dim, double spacing) {
+  for (std::size_t k = 0; k < static_cast<std::size_t>(dim); ++k) {
+    if (std::abs(p[k] - x[k]) >= 0.5 * spacing * (1 - 1e-9)) {
+      return false;
+    }
+  }
+  return true;
+}
+
+/// Whether p lies in some body's `minus` shape and in no body.
+bool in_a_hole(int dim, double spacing, const std::vector<BodySpec>& bodies, const Vec3& p) {
+  const double tol = 1e-6 * spacing;
+  bool in_hole = false;
+  for (const BodySpec& body : bodies) {
+    for (const Shape& hole : body.region.minus) {
+      in_hole = in_hole || hole.contains(p, dim, -tol);
+    }
+  }
+  return in_hole && std::none_of(bodies.begin(), bodies.end(), [&](const BodySpec& body) {
+           return body.region.contains(p, dim, tol);
+         });
+}
+
+} // namespace
+
 /// Whether the bond between body particles a and b passes through a hole: a point of it, sampled
 /// every λ/8, lies in some body's `minus` shape and in no body. A notch narrower than the horizon
-/// would otherwise be bridged by the bonds across it.
-bool passes_through_hole(int dim, double spacing, const std::vector<BodySpec>& bodies,
-                         const Vec3& a, const Vec3& b) {
-  const double tol = 1e-6 * spacing;
+/// would otherwise be bridged by the bonds across it. Points inside either end's own lattice cell
+/// do not count: a cut cell (lattice.hpp) whose site lies in the hole still holds material.
+bool bond_passes_through_hole(int dim, double spacing, const std::vector<BodySpec>& bodies,
+                              const Vec3& a, const Vec3& b) {
   double length = 0;
   for (std::size_t k = 0; k < 3; ++k) {
     length += (b[k] - a[k]) * (b[k] - a[k]);
@@ -23,27 +49,20 @@ bool passes_through_hole(int dim, double spacing, const std::vector<BodySpec>& b
   for (int s = 1; s < samples; ++s) {
     const double t = static_cast<double>(s) / samples;
     const Vec3 p{a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]), a[2] + t * (b[2] - a[2])};
-    bool in_hole = false;
-    for (const BodySpec& body : bodies) {
-      for (const Shape& hole : body.region.minus) {
-        in_hole = in_hole || hole.contains(p, dim, -tol);
-      }
+    if (in_cell(p, a, dim, spacing) || in_cell(p, b, dim, spacing)) {
+      continue;
     }
-    if (in_hole && std::none_of(bodies.begin(), bodies.end(), [&](const BodySpec& body) {
-          return body.region.contains(p, dim, tol);
-        })) {
+    if (in_a_hole(dim, spacing, bodies, p)) {
       return true;
     }
   }
   return false;
 }
 
-} // namespace
-
-std::vector<std::size_t>
-cut_bonds_across_cracks_and_holes(int dim, double spacing, const std::vector<Crack>& cracks,
-                                  const std::vector<BodySpec>& bodies, const ParticleSet& ps,
-                                  std::size_t body_count, BondFamily& family) {
+std::vector<std::size_t> cut_bonds_across_cracks_and_holes(
+    int dim, double spacing, const std::vector<Crack>& cracks, const std::vector<BodySpec>& bodies,
+    const ParticleSet& ps, std::size_t body_count, const std::vector<std::uint8_t>& mirror_image,
+    BondFamily& family) {
   std::vector<std::size_t> cut(cracks.size(), 0);
   const bool holes = std::any_of(bodies.begin(), bodies.end(),
                                  [](const BodySpec& b) { return !b.region.minus.empty(); });
@@ -63,6 +82,47 @@ cut_bonds_across_cracks_and_holes(int dim, double spacing, const std::vector<Cra
       }
     }
   }
+  // For the holes, a ghost inside a hole stands for all its equally near body particles (a ghost
+  // in a hole often has several, and a choice by index would make a symmetric body's ghosts lose
+  // bonds on one side only); the mirror images of body particles beyond symmetry planes count as
+  // body particles, as in the full model. Any other ghost (beyond a face, or such an image) stands
+  // for itself, as the body particle it continues or mirrors would.
+  const auto body_like = [&](std::size_t k) {
+    return k < body_count || (!mirror_image.empty() && mirror_image[k] != 0);
+  };
+  std::vector<std::vector<std::size_t>> seen_as(holes ? ps.size() : 0);
+  for (std::size_t g = 0; g < seen_as.size(); ++g) {
+    if (body_like(g) || !in_a_hole(dim, spacing, bodies, ps.position[g])) {
+      seen_as[g].push_back(g);
+      continue;
+    }
+    double best = std::numeric_limits<double>::infinity();
+    for (std::size_t k = family.offsets[g]; k < family.offsets[g + 1]; ++k) {
+      if (body_like(family.neighbour[k])) {
+        best = std::min(best, 1.0 / family.inverse_length[k]);
+      }
+    }
+    for (std::size_t k = family.offsets[g]; k < family.offsets[g + 1]; ++k) {
+      if (body_like(family.neighbour[k]) && 1.0 / family.inverse_length[k] <= best * (1 + 1e-9)) {
+        seen_as[g].push_back(family.neighbour[k]);
+      }
+    }
+  }
+  // A bond passes through a hole when it does for every choice among what its ends stand for.
+  const auto through_hole = [&](std::size_t i, std::size_t j) {
+    if (seen_as[i].empty() || seen_as[j].empty()) {
+      return false; // a ghost in a hole with no body particle near: no bond to judge by
+    }
+    for (const std::size_t a : seen_as[i]) {
+      for (const std::size_t b : seen_as[j]) {
+        if (a == b ||
+            !bond_passes_through_hole(dim, spacing, bodies, ps.position[a], ps.position[b])) {
+          return false;
+        }
+      }
+    }
+    return true;
+  };
   BondFamily kept;
   kept.offsets.reserve(family.offsets.size());
   kept.offsets.push_back(0);
@@ -86,11 +146,7 @@ cut_bonds_across_cracks_and_holes(int dim, double spacing, const std::vector<Cra
           cut[c] += i < j ? 1 : 0;
         }
       }
-      const std::size_t a = stands_for[i];
-      const std::size_t b = stands_for[j];
-      crossed =
-          crossed || (holes && a != b && a < body_count && b < body_count &&
-                      passes_through_hole(dim, spacing, bodies, ps.position[a], ps.position[b]));
+      crossed = crossed || (holes && through_hole(i, j));
       if (!crossed) {
         kept.neighbour.push_back(family.neighbour[k]);
         kept.inverse_length.push_back(family.inverse_length[k]);

@@ -230,24 +230,33 @@ class FitCloud {
 public:
   FitCloud(const std::vector<Vec3>& position, const BondFamily& family,
            const std::vector<std::uint8_t>& dependent, const std::vector<SymmetryPlane>& symmetry,
-           double fit_radius, double tolerance)
+           double fit_radius, double tolerance,
+           const std::function<bool(const Vec3&, const Vec3&)>& bonded)
       : position_(position), family_(family), dependent_(dependent), symmetry_(symmetry),
-        fit_radius_(fit_radius), tolerance_(tolerance) {}
+        fit_radius_(fit_radius), tolerance_(tolerance), bonded_(bonded) {}
 
   /// The data of the dependant at p, whose free neighbours are `near` (not empty).
   const std::vector<Datum>& around(const Vec3& p, const std::vector<std::uint32_t>& near) {
     // The cloud is centred on the nearest sources' centroid: on the source itself where there is
-    // one, between them where several are equally near.
+    // one, between them where several are equally near. Beside a symmetry plane the sources'
+    // images count as the full model's particles would, so a half model centres as its full
+    // model does.
+    candidates_.clear();
+    for (const std::uint32_t n : near) {
+      for (unsigned mask = 0; mask < (1U << symmetry_.size()); ++mask) {
+        candidates_.push_back({n, mask, image(position_[n], mask)});
+      }
+    }
     const Vec3 centre = nearest_centroid(
-        near.size(), [&](std::size_t k) -> const Vec3& { return position_[near[k]]; }, p,
+        candidates_.size(), [&](std::size_t k) -> const Vec3& { return candidates_[k].at; }, p,
         tolerance_, nearest_);
     data_.clear();
     for (const std::size_t k : nearest_) {
-      const std::uint32_t n = near[k];
-      add_within(n, centre);
+      const std::uint32_t n = candidates_[k].source;
+      add_within(n, n, centre);
       for (std::size_t b = family_.offsets[n]; b < family_.offsets[n + 1]; ++b) {
         if (!dependent_[family_.neighbour[b]]) {
-          add_within(family_.neighbour[b], centre);
+          add_within(n, family_.neighbour[b], centre);
         }
       }
     }
@@ -274,8 +283,20 @@ public:
   }
 
 private:
-  /// Source s, and its images across the symmetry planes, where within the fit radius of c.
-  void add_within(std::uint32_t s, const Vec3& c) {
+  /// x mirrored across the symmetry planes `mask` names.
+  Vec3 image(Vec3 x, unsigned mask) const {
+    for (std::size_t k = 0; k < symmetry_.size(); ++k) {
+      if (((mask >> k) & 1U) != 0) {
+        const auto axis = static_cast<std::size_t>(symmetry_[k].axis);
+        x[axis] = 2 * symmetry_[k].at - x[axis];
+      }
+    }
+    return x;
+  }
+
+  /// Source s of the family of `owner`, and its images across the symmetry planes, where within
+  /// the fit radius of c (an image only if the full model would bond it to `owner`).
+  void add_within(std::uint32_t owner, std::uint32_t s, const Vec3& c) {
     const double reach2 = fit_radius_ * fit_radius_ * (1 + 1e-9);
     for (unsigned mask = 0; mask < (1U << symmetry_.size()); ++mask) {
       Vec3 x = position_[s];
@@ -287,7 +308,8 @@ private:
           x[axis] = 2 * symmetry_[k].at - x[axis];
         }
       }
-      if ((mask == 0 || distinct) && distance2(x, c) <= reach2) {
+      if ((mask == 0 || (distinct && (!bonded_ || bonded_(position_[owner], x)))) &&
+          distance2(x, c) <= reach2) {
         data_.push_back({s, mask, x});
       }
     }
@@ -298,25 +320,28 @@ private:
   const std::vector<SymmetryPlane>& symmetry_;
   double fit_radius_;
   double tolerance_;
-  std::vector<std::size_t> nearest_; // indices into the dependant's free neighbours
+  const std::function<bool(const Vec3&, const Vec3&)>& bonded_;
+  std::vector<Datum> candidates_;    // the dependant's free neighbours and their images
+  std::vector<std::size_t> nearest_; // indices into candidates_
   std::vector<Datum> data_;
 };
 
 } // namespace
 
-ExtrapolatedParticles extrapolation_ties(int dim, double spacing, const std::vector<Vec3>& position,
-                                         const BondFamily& family,
-                                         const std::vector<std::uint8_t>& dependent,
-                                         const std::vector<std::uint32_t>& fitted,
-                                         const std::vector<ClampPlane>& planes,
-                                         const std::vector<SymmetryPlane>& symmetry) {
+ExtrapolatedParticles
+extrapolation_ties(int dim, double spacing, const std::vector<Vec3>& position,
+                   const BondFamily& family, const std::vector<std::uint8_t>& dependent,
+                   const std::vector<std::uint32_t>& fitted, const std::vector<ClampPlane>& planes,
+                   const std::vector<SymmetryPlane>& symmetry,
+                   const std::function<bool(const Vec3&, const Vec3&)>& bonded) {
   ExtrapolatedParticles ties;
   const double tolerance = 1e-6 * spacing;
   // The fit is local: the free particles within the fit radius of the nearest (all of its
   // family for a horizon shorter than that). The smaller the cloud, the fewer sources each
   // dependant couples and the less the static solver's factor fills in (√6 λ: about 3× fewer
   // than with δ at m = 2√3).
-  FitCloud cloud(position, family, dependent, symmetry, ghost_fit_radius * spacing, tolerance);
+  FitCloud cloud(position, family, dependent, symmetry, ghost_fit_radius * spacing, tolerance,
+                 bonded);
   std::vector<std::uint32_t> near;
   std::vector<Vec3> data_position;
   std::vector<std::uint32_t> data_index;

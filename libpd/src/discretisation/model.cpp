@@ -1,5 +1,6 @@
 #include "libpd/discretisation/model.hpp"
 
+#include "cut_cells.hpp"
 #include "libpd/discretisation/bond_cuts.hpp"
 #include "libpd/discretisation/surface_load.hpp"
 #include "symmetry_images.hpp"
@@ -7,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <limits>
 #include <map>
 #include <set>
@@ -340,6 +342,17 @@ void take_material_of_nearest_body_particle(const BondFamily& family, std::size_
   }
 }
 
+/// Whether a bond between two points is left by the holes (bond_cuts.hpp); null without holes.
+std::function<bool(const Vec3&, const Vec3&)> bonded_across_holes(const ModelSpec& spec) {
+  if (std::none_of(spec.bodies.begin(), spec.bodies.end(),
+                   [](const BodySpec& b) { return !b.region.minus.empty(); })) {
+    return nullptr;
+  }
+  return [&spec](const Vec3& a, const Vec3& b) {
+    return !bond_passes_through_hole(spec.dimension.dim, spec.lattice.spacing, spec.bodies, a, b);
+  };
+}
+
 /// The extrapolated dependants (ghost_layers.hpp): the ghosts, and the particles of mirror
 /// supports under `quadratic` coupling. Particles held by any constraint are never sources.
 ExtrapolatedParticles extrapolated_particles(const ModelSpec& spec, const ParticleSet& particles,
@@ -380,7 +393,8 @@ ExtrapolatedParticles extrapolated_particles(const ModelSpec& spec, const Partic
   return detail::symmetry_images(
       spec, particles, body_count, region_tolerance(spec), symmetry, constraints,
       extrapolation_ties(spec.dimension.dim, spec.lattice.spacing, particles.position, family,
-                         dependent, fitted, clamp_planes(spec), symmetry));
+                         dependent, fitted, clamp_planes(spec), symmetry,
+                         bonded_across_holes(spec)));
 }
 
 /// The loads as force densities [N/m³] per dof (empty without loads): a resultant is shared in
@@ -614,13 +628,16 @@ Model build_model(const ModelSpec& spec, ParticleSet particles) {
     m.family = point_cloud_family(spec, m.particles);
   }
   m.bonds_cut_by_crack = cut_bonds_across_cracks_and_holes(
-      dim, spec.lattice.spacing, spec.cracks, spec.bodies, m.particles, body_count, m.family);
+      dim, spec.lattice.spacing, spec.cracks, spec.bodies, m.particles, body_count,
+      detail::images_of_body_particles(spec, m.particles, body_count), m.family);
   take_material_of_nearest_body_particle(m.family, body_count, m.particles);
   m.constraints = support_constraints(spec, m.particles, body_count);
   m.extrapolated = extrapolated_particles(spec, m.particles, body_count, m.family, m.constraints);
 
   const std::set<std::uint16_t> used(m.particles.material.begin(), m.particles.material.end());
   m.effects = kernel_effects(spec, used.size());
+  const std::vector<double> share = detail::cell_shares(spec, m.particles, body_count);
+  m.effects.per_bond_field = m.effects.per_bond_field || !share.empty();
 
   const auto constants = material_constants(spec);
   m.density.resize(n);
@@ -647,6 +664,10 @@ Model build_model(const ModelSpec& spec, ParticleSet particles) {
       for (std::size_t k = 0; k < correction.size(); ++k) {
         correction[k] *= weight[k];
       }
+    }
+    if (!share.empty() && spec.surface_correction == SurfaceCorrection::ghost) {
+      detail::scale_bonds_of_cut_cells(share, detail::energy_weights(spec, m.particles, share),
+                                       m.family, m.extrapolated, correction);
     }
     drop_bonds_without_stiffness(m.family, correction);
     const std::size_t nb = m.family.directed_bond_count();

@@ -39,6 +39,7 @@
 #include "libpd/discretisation/point_cloud.hpp"
 
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 namespace pd {
@@ -98,13 +99,15 @@ inline constexpr double ghost_fit_radius = 2.449489742783178;
 /// term drop those terms, so thin bodies extrapolate with what they can resolve. Beside a symmetry
 /// plane the fit also takes the sources' mirror images within the fit radius as data (each a term
 /// of its source with the normal component negated), so that a ghost beside the plane is fitted
-/// from both sides as in the full model.
-ExtrapolatedParticles extrapolation_ties(int dim, double spacing, const std::vector<Vec3>& position,
-                                         const BondFamily& family,
-                                         const std::vector<std::uint8_t>& dependent,
-                                         const std::vector<std::uint32_t>& fitted,
-                                         const std::vector<ClampPlane>& planes,
-                                         const std::vector<SymmetryPlane>& symmetry = {});
+/// from both sides as in the full model: the images the full model's family of the nearest source
+/// would hold, those that `bonded` (the nearest source's position, the image's; null: all) allows,
+/// as a hole cuts the full model's bonds (bond_cuts.hpp).
+ExtrapolatedParticles
+extrapolation_ties(int dim, double spacing, const std::vector<Vec3>& position,
+                   const BondFamily& family, const std::vector<std::uint8_t>& dependent,
+                   const std::vector<std::uint32_t>& fitted, const std::vector<ClampPlane>& planes,
+                   const std::vector<SymmetryPlane>& symmetry = {},
+                   const std::function<bool(const Vec3&, const Vec3&)>& bonded = nullptr);
 
 /// The same dependants fitted again, each from only the part of its data (its terms' sources, seen
 /// through the symmetry planes their negated bits name) within `fit_radius` λ < ghost_fit_radius of
