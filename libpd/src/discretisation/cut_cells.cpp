@@ -34,7 +34,9 @@ std::vector<double> energy_weights(const ModelSpec& spec, const ParticleSet& par
   const double spacing = spec.lattice.spacing;
   std::map<std::array<long long, 3>, std::size_t> body_at;
   for (std::size_t i = 0; i < share.size(); ++i) {
-    body_at.emplace(nearest_lattice_site(spec.lattice, dim, particles.position[i]), i);
+    if (!spec.bodies[particles.body[i]].points) { // a point cloud's particles are not at sites
+      body_at.emplace(nearest_lattice_site(spec.lattice, dim, particles.position[i]), i);
+    }
   }
   std::vector<double> weight = share;
   for (std::size_t i = 0; i < share.size(); ++i) {
@@ -117,13 +119,7 @@ std::vector<std::uint8_t> images_of_body_particles(const ModelSpec& spec,
   std::vector<std::uint8_t> image(particles.size(), 0);
   for (std::size_t g = body_count; g < particles.size(); ++g) {
     for (unsigned mask = 1; mask < (1U << planes.size()) && image[g] == 0; ++mask) {
-      Vec3 x = particles.position[g];
-      for (std::size_t k = 0; k < planes.size(); ++k) {
-        if (((mask >> k) & 1U) != 0) {
-          const auto a = static_cast<std::size_t>(planes[k].axis);
-          x[a] = 2 * planes[k].at - x[a];
-        }
-      }
+      const Vec3 x = mirrored(particles.position[g], planes, mask);
       image[g] = body_sites.contains(nearest_lattice_site(spec.lattice, dim, x)) ? 1 : 0;
     }
   }

@@ -244,7 +244,7 @@ public:
     candidates_.clear();
     for (const std::uint32_t n : near) {
       for (unsigned mask = 0; mask < (1U << symmetry_.size()); ++mask) {
-        candidates_.push_back({n, mask, image(position_[n], mask)});
+        candidates_.push_back({n, mask, mirrored(position_[n], symmetry_, mask)});
       }
     }
     const Vec3 centre = nearest_centroid(
@@ -283,31 +283,18 @@ public:
   }
 
 private:
-  /// x mirrored across the symmetry planes `mask` names.
-  Vec3 image(Vec3 x, unsigned mask) const {
-    for (std::size_t k = 0; k < symmetry_.size(); ++k) {
-      if (((mask >> k) & 1U) != 0) {
-        const auto axis = static_cast<std::size_t>(symmetry_[k].axis);
-        x[axis] = 2 * symmetry_[k].at - x[axis];
-      }
-    }
-    return x;
-  }
-
   /// Source s of the family of `owner`, and its images across the symmetry planes, where within
   /// the fit radius of c (an image only if the full model would bond it to `owner`).
   void add_within(std::uint32_t owner, std::uint32_t s, const Vec3& c) {
     const double reach2 = fit_radius_ * fit_radius_ * (1 + 1e-9);
     for (unsigned mask = 0; mask < (1U << symmetry_.size()); ++mask) {
-      Vec3 x = position_[s];
       bool distinct = true; // an image across a plane the source lies on is the source
       for (std::size_t k = 0; k < symmetry_.size(); ++k) {
-        if (((mask >> k) & 1U) != 0) {
-          const auto axis = static_cast<std::size_t>(symmetry_[k].axis);
-          distinct = distinct && std::abs(x[axis] - symmetry_[k].at) > tolerance_;
-          x[axis] = 2 * symmetry_[k].at - x[axis];
-        }
+        const auto axis = static_cast<std::size_t>(symmetry_[k].axis);
+        distinct = distinct && (((mask >> k) & 1U) == 0 ||
+                                std::abs(position_[s][axis] - symmetry_[k].at) > tolerance_);
       }
+      const Vec3 x = mirrored(position_[s], symmetry_, mask);
       if ((mask == 0 || (distinct && (!bonded_ || bonded_(position_[owner], x)))) &&
           distance2(x, c) <= reach2) {
         data_.push_back({s, mask, x});

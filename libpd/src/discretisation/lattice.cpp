@@ -160,12 +160,14 @@ CellShare cell_share(const Region& region, int dim, const Vec3& centre, double s
     }
     return in;
   };
-  Vec3 sum{0, 0, 0};
-  const auto count = [&](int n, bool midpoints) {
-    // n points per axis: the sub-cell midpoints, or n = 3 points from face to face.
+  struct Count {
     int inside = 0;
     int total = 0;
-    sum = {0, 0, 0};
+    Vec3 offset_sum{0, 0, 0}; ///< of the points inside, from the centre
+  };
+  const auto count = [&](int n, bool midpoints) {
+    // n points per axis: the sub-cell midpoints, or n = 3 points from face to face.
+    Count c;
     const int nj = dim > 1 ? n : 1;
     const int nk = dim > 2 ? n : 1;
     for (int k = 0; k < nk; ++k) {
@@ -178,26 +180,26 @@ CellShare cell_share(const Region& region, int dim, const Vec3& centre, double s
             p[a] += (t - 0.5) * spacing;
           }
           if (holds(p)) {
-            ++inside;
+            ++c.inside;
             for (std::size_t a = 0; a < 3; ++a) {
-              sum[a] += p[a] - centre[a];
+              c.offset_sum[a] += p[a] - centre[a];
             }
           }
-          ++total;
+          ++c.total;
         }
       }
     }
-    return std::pair<int, int>{inside, total};
+    return c;
   };
-  const auto [coarse_in, coarse_total] = count(3, false);
-  if (coarse_in == 0 || coarse_in == coarse_total) {
-    return coarse_in == 0 ? CellShare{} : CellShare{1.0, {0, 0, 0}};
+  const Count coarse = count(3, false);
+  if (coarse.inside == 0 || coarse.inside == coarse.total) {
+    return coarse.inside == 0 ? CellShare{} : CellShare{1.0, {0, 0, 0}};
   }
-  const auto [in, total] = count(dim == 3 ? 8 : dim == 2 ? 16 : 64, true);
+  const Count fine = count(dim == 3 ? 8 : dim == 2 ? 16 : 64, true);
   CellShare out;
-  out.share = static_cast<double>(in) / static_cast<double>(total);
-  for (std::size_t a = 0; a < 3 && in > 0; ++a) {
-    out.centroid_offset[a] = sum[a] / in;
+  out.share = static_cast<double>(fine.inside) / static_cast<double>(fine.total);
+  for (std::size_t a = 0; a < 3 && fine.inside > 0; ++a) {
+    out.centroid_offset[a] = fine.offset_sum[a] / fine.inside;
   }
   return out;
 }

@@ -66,6 +66,17 @@ struct SymmetryPlane {
   double side = 1;
 };
 
+/// x mirrored across the planes of `planes` whose bits are set in `mask` (bit k: planes[k]).
+inline Vec3 mirrored(Vec3 x, const std::vector<SymmetryPlane>& planes, unsigned mask) {
+  for (std::size_t k = 0; k < planes.size(); ++k) {
+    if (((mask >> k) & 1U) != 0) {
+      const auto axis = static_cast<std::size_t>(planes[k].axis);
+      x[axis] = 2 * planes[k].at - x[axis];
+    }
+  }
+  return x;
+}
+
 /// The lattice sites that are not particles of `body` but lie within the horizon of one of them:
 /// where ghost particles go. A particle's own site is its position rounded to the lattice, so
 /// jittered particle sets keep their ghosts on the regular lattice. Deterministic order (sorted
