@@ -15,6 +15,8 @@
 
 namespace pdfem {
 
+class JsonWriter;
+
 // The set of lattice cells (cell-centred convention: the cell of edge λ around a particle) a
 // load acts on: PD shares a load among these particles in proportion to their volumes, which is
 // a uniform force density over the union of their cells.
@@ -104,6 +106,12 @@ struct SolidRegion {
   std::vector<Solid> holes;
 };
 
+// A plane x[axis] = at, within a support's region.
+struct SupportLayer {
+  int axis = 0;
+  double at = 0.;
+};
+
 struct SceneProblem {
   std::string path;
   std::string title;
@@ -132,6 +140,10 @@ struct SceneProblem {
   // On a mesh body filled with the lattice: per support, its particles' cells (the region PD
   // holds), which the FE holds instead of elements.
   std::vector<LatticeCells> support_cells;
+  // Per support: where its particles form one layer across an axis and it leaves a component
+  // free, the plane of that layer (support_layer in scene_problem.cc); the support's region in
+  // `supports` is then its boxes flattened onto that plane, so the FE holds the plane's nodes.
+  std::vector<std::optional<SupportLayer>> support_layers;
   pd::Box bounding_box;                      // of the domain
   std::array<std::vector<double>, 3> planes; // per axis: every box face of the scene (sorted)
 
@@ -158,6 +170,9 @@ MeshBodyElements read_mesh_body_elements(const pd::BodySpec& body, std::size_t i
 // std::runtime_error naming any feature the FE problem cannot represent (damage, plasticity,
 // an unsupported shape, a probe on no body point).
 SceneProblem read_scene_problem(const std::string& path);
+
+// fe.json's `supports_on_a_plane`: the supports held on their layer's plane (name, axis, at).
+void write_supports_on_a_plane(JsonWriter& w, const SceneProblem& problem);
 // The same for a scene already read (tests set the features the reader cannot express yet).
 SceneProblem translate_scene(const pd::Scene& scene);
 

@@ -267,7 +267,7 @@ void SceneReference<dim>::setup_system() {
     for (types::global_dof_index i = 0; i < n; ++i) {
       const pd::Vec3 p = to_vec3(points[i]);
       const unsigned int c = dof_component[i];
-      const bool in_region = by_elements                          ? in_elements[i] != 0
+      const bool in_region = by_elements ? in_elements[i] != 0
                              : by_cells && !sup.mirrors() && !sup.symmetric()
                                  ? problem.support_cells[s].touches(p, tol)
                                  : sup.region.contains(p, dim, tol);
@@ -689,6 +689,7 @@ void SceneReference<dim>::output_results(const double wall_time) const {
                          "globally per level");
     }
     w.end_object();
+    write_supports_on_a_plane(w, problem);
     w.value("wall_time_s", wall_time);
     if (!stopped_for_memory.empty())
       w.value("refinement_stopped", stopped_for_memory);

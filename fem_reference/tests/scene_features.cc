@@ -12,8 +12,10 @@
 //   symmetry         ν = 0.3, the clamp replaced by symmetry planes x = 0 and y = 0 (whole
 //                    planes): u_x = σx/E, u_y = -νσy/E, σ_xx = σ at a particle, reaction -F.
 //   point-load       as symmetry, the load a point load at (L, H/2): the same far field.
-//   displacement     as symmetry with ν = 0, no load: the box [L - λ, L] displaced by d in
-//                    x (a displacement support): u_x = d x/(L - λ), reactions ±E H t d/(L - λ).
+//   displacement     as symmetry with ν = 0, no load: the last particle column, x = L - λ/2,
+//                    displaced by d in x (a displacement support of one layer, y free, so the
+//                    FE holds its plane, as PD holds the particles): u_x = d x/(L - λ/2),
+//                    reactions ±E H t d/(L - λ/2).
 // Exit 0 if every check passes.
 #include "scene_reference.h"
 
@@ -117,7 +119,7 @@ bool displacement(pd::Scene scene, const std::string& work) {
   pull.name = "pull";
   pull.region = scene.model.loads.at(0).load.region; // the last particle column [1.95, 2]
   pull.prescribed = {true, false, false};
-  constexpr double d = 1e-4, length = 1.95;
+  constexpr double d = 1e-4, length = 1.975; // to the column's plane
   pull.displacement = {d, 0., 0.};
   scene.model.supports.push_back(pull);
   scene.model.loads.clear();

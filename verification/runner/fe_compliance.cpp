@@ -6,6 +6,7 @@
 #include <cmath>
 #include <fmt/format.h>
 #include <fstream>
+#include <map>
 #include <stdexcept>
 #include <yaml-cpp/yaml.h>
 
@@ -77,18 +78,12 @@ std::vector<double> probe_levels(const YAML::Node& fe, const std::string& probe)
   throw std::runtime_error("fe.json has no probe '" + probe + "'");
 }
 
-} // namespace
-
-ComplianceGriffith griffith_load_from_fe_compliance(const std::filesystem::path& scene_file,
-                                                    const Scene& scene, const std::string& probe,
-                                                    double grip_opening,
-                                                    const std::filesystem::path& dir) {
+/// The crack's ends that are tips (inside a body; an end on the surface is the crack's mouth).
+std::array<bool, 2> crack_tips(const Scene& scene) {
   if (scene.model.cracks.empty() || scene.model.cracks[0].vertices.size() != 2) {
-    throw std::runtime_error("griffith_load_from_fe_compliance: the scene's first crack must be a "
-                             "segment");
+    throw std::runtime_error("FE compliance: the scene's first crack must be a segment");
   }
   const auto& v = scene.model.cracks[0].vertices;
-  // An end is a tip when it lies inside a body; an end on the surface is the crack's mouth.
   const double inside = -1e-9 * scene.model.lattice.spacing;
   std::array<bool, 2> tip{false, false};
   for (std::size_t k = 0; k < 2; ++k) {
@@ -96,24 +91,47 @@ ComplianceGriffith griffith_load_from_fe_compliance(const std::filesystem::path&
       tip[k] = tip[k] || body.region.contains(v[k], scene.model.dimension.dim, inside);
     }
   }
-  const int tips = (tip[0] ? 1 : 0) + (tip[1] ? 1 : 0);
-  if (tips == 0) {
-    throw std::runtime_error("griffith_load_from_fe_compliance: neither end of the crack lies "
-                             "inside a body");
+  if (!tip[0] && !tip[1]) {
+    throw std::runtime_error("FE compliance: neither end of the crack lies inside a body");
   }
+  return tip;
+}
+
+/// The probe's FE value on each mesh level with every tip moved by `shift`.
+std::vector<double> loads_with_tips_moved(const std::filesystem::path& scene_file,
+                                          const std::string& probe, double shift,
+                                          const std::array<bool, 2>& tip,
+                                          const std::filesystem::path& dir) {
+  SceneVerifyOptions options;
+  options.fe_levels = fe_levels;
+  const auto file = write_elastic_variant(scene_file, probe, shift, tip, dir / "scene.yaml");
+  return probe_levels(run_pd_fem(file, dir, options), probe);
+}
+
+/// pd-fem halves the mesh size from level to level: order-1 extrapolation to zero mesh size.
+double extrapolated(const std::vector<double>& levels) {
+  const auto n = levels.size();
+  return n < 2 ? levels.back() : 2 * levels[n - 1] - levels[n - 2];
+}
+
+} // namespace
+
+ComplianceGriffith griffith_load_from_fe_compliance(const std::filesystem::path& scene_file,
+                                                    const Scene& scene, const std::string& probe,
+                                                    double grip_opening,
+                                                    const std::filesystem::path& dir) {
+  const std::array<bool, 2> tip = crack_tips(scene);
+  const int tips = (tip[0] ? 1 : 0) + (tip[1] ? 1 : 0);
+  const auto& v = scene.model.cracks[0].vertices;
   // The length one tip would have if the crack grew from the surface or from its middle.
   const double tip_length = std::hypot(v[1][0] - v[0][0], v[1][1] - v[0][1]) / tips;
   const double h = step_fraction * tip_length;
   const Material& m = scene.model.materials.at(0);
   const double g0 = m.fracture_energy.value_or(0);
   const double thickness = scene.model.dimension.thickness;
-  SceneVerifyOptions options;
-  options.fe_levels = fe_levels;
   std::vector<std::vector<double>> loads; // at a − h, a, a + h
   for (const auto& [name, step] : {std::pair{"shorter", -h}, {"as-given", 0.0}, {"longer", h}}) {
-    const auto file =
-        write_elastic_variant(scene_file, probe, step, tip, dir / name / "scene.yaml");
-    loads.push_back(probe_levels(run_pd_fem(file, dir / name, options), probe));
+    loads.push_back(loads_with_tips_moved(scene_file, probe, step, tip, dir / name));
   }
   ComplianceGriffith out;
   out.crack_step = h;
@@ -128,11 +146,73 @@ ComplianceGriffith griffith_load_from_fe_compliance(const std::filesystem::path&
     }
     out.level_loads.push_back(loads[1][level] * std::sqrt(g0 / g));
   }
-  // pd-fem halves the mesh size from level to level.
-  const auto n = out.level_loads.size();
-  out.failure_load =
-      n < 2 ? out.level_loads.back() : 2 * out.level_loads[n - 1] - out.level_loads[n - 2];
+  out.failure_load = extrapolated(out.level_loads);
   return out;
+}
+
+ComplianceGrowth lefm_growth_from_fe_compliance(const std::filesystem::path& scene_file,
+                                                const Scene& scene, const std::string& probe,
+                                                double grip_opening, double step,
+                                                double max_extension,
+                                                const std::filesystem::path& dir) {
+  const std::array<bool, 2> tip = crack_tips(scene);
+  const int tips = (tip[0] ? 1 : 0) + (tip[1] ? 1 : 0);
+  const double g0 = scene.model.materials.at(0).fracture_energy.value_or(0);
+  const double thickness = scene.model.dimension.thickness;
+  const auto points = static_cast<int>(std::ceil(max_extension / step - 1e-9)) + 1;
+  // The FE load, extrapolated in the mesh size, with the tips moved by k·step, k = −2 … points+1.
+  std::map<int, double> load;
+  for (int k = -2; k <= points + 1; ++k) {
+    const double shift = k * step;
+    load[k] = extrapolated(
+        loads_with_tips_moved(scene_file, probe, shift, tip, dir / fmt::format("tip{:+d}", k)));
+  }
+  ComplianceGrowth out;
+  for (int k = 0; k < points; ++k) {
+    const double dp_da = (8 * (load[k + 1] - load[k - 1]) - (load[k + 2] - load[k - 2])) /
+                         (12 * step) / (tips * thickness);
+    const double g = -0.5 * grip_opening * dp_da; // at the opening grip_opening
+    if (!(g > 0)) {
+      throw std::runtime_error(fmt::format("FE compliance: the crack's energy release rate at "
+                                           "extension {} is {} (the force must fall as the "
+                                           "crack grows)",
+                                           k * step, g));
+    }
+    const double scale = std::sqrt(g0 / g); // G grows as the opening squared
+    out.extension.push_back(k * step);
+    out.load.push_back(load[k] * scale);
+    out.opening.push_back(grip_opening * scale);
+  }
+  return out;
+}
+
+namespace {
+
+/// Log–log interpolation of y(x) on increasing x; NaN outside.
+double log_interpolate(const std::vector<double>& x, const std::vector<double>& y, double at) {
+  for (std::size_t k = 0; k + 1 < x.size(); ++k) {
+    if (at >= x[k] && at <= x[k + 1]) {
+      const double t = std::log(at / x[k]) / std::log(x[k + 1] / x[k]);
+      return y[k] * std::pow(y[k + 1] / y[k], t);
+    }
+  }
+  return std::nan("");
+}
+
+} // namespace
+
+double ComplianceGrowth::load_at(double at) const {
+  return log_interpolate(opening, load, at);
+}
+
+double ComplianceGrowth::extension_at(double at) const {
+  for (std::size_t k = 0; k + 1 < opening.size(); ++k) {
+    if (at >= opening[k] && at <= opening[k + 1]) {
+      const double t = std::log(at / opening[k]) / std::log(opening[k + 1] / opening[k]);
+      return extension[k] + t * (extension[k + 1] - extension[k]);
+    }
+  }
+  return std::nan("");
 }
 
 } // namespace pd::verification

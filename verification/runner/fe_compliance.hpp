@@ -33,4 +33,26 @@ ComplianceGriffith griffith_load_from_fe_compliance(const std::filesystem::path&
                                                     double grip_opening,
                                                     const std::filesystem::path& dir);
 
+/// LEFM's growth branch of the same body under a growing opening: at each crack length a0 + e
+/// (e = 0, s, 2s, …, the tip moved by e), the load and grip opening at which G = G0, from the FE
+/// compliance as above. dP/da is the fourth-order central difference on that grid (the tips
+/// also moved by −2s, −s and past the last point), so the difference's own error stays below
+/// 1e-4 of G; loads are extrapolated in the FE mesh size as above.
+struct ComplianceGrowth {
+  std::vector<double> extension; ///< e, of each tip
+  std::vector<double> load;      ///< P at which G(a0 + e) = G0
+  std::vector<double> opening;   ///< the grips' opening at that load
+  /// LEFM's load at opening Δ on the growth branch (log–log interpolation between the points;
+  /// NaN outside them).
+  double load_at(double opening) const;
+  /// LEFM's crack extension at opening Δ on the growth branch (NaN outside the points).
+  double extension_at(double opening) const;
+};
+
+ComplianceGrowth lefm_growth_from_fe_compliance(const std::filesystem::path& scene_file,
+                                                const Scene& scene, const std::string& probe,
+                                                double grip_opening, double step,
+                                                double max_extension,
+                                                const std::filesystem::path& dir);
+
 } // namespace pd::verification
