@@ -2,6 +2,7 @@
 
 #include "scene_verification.hpp"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <fmt/format.h>
@@ -25,7 +26,7 @@ constexpr double step_fraction = 0.1;
 /// outwards by `h` (inwards when negative): damage, stopping rules and output removed, the one
 /// probe kept.
 std::filesystem::path write_elastic_variant(const std::filesystem::path& scene_file,
-                                            const std::string& probe, double h,
+                                            const std::vector<std::string>& probes, double h,
                                             const std::array<bool, 2>& tip,
                                             const std::filesystem::path& file) {
   YAML::Node s = YAML::LoadFile(scene_file.string());
@@ -46,7 +47,7 @@ std::filesystem::path write_elastic_variant(const std::filesystem::path& scene_f
   s["solver"] = solver;
   YAML::Node kept;
   for (const YAML::Node& p : s["probes"]) {
-    if (p["name"].as<std::string>() == probe) {
+    if (std::find(probes.begin(), probes.end(), p["name"].as<std::string>()) != probes.end()) {
       kept.push_back(p);
     }
   }
@@ -97,15 +98,20 @@ std::array<bool, 2> crack_tips(const Scene& scene) {
   return tip;
 }
 
-/// The probe's FE value on each mesh level with every tip moved by `shift`.
-std::vector<double> loads_with_tips_moved(const std::filesystem::path& scene_file,
-                                          const std::string& probe, double shift,
-                                          const std::array<bool, 2>& tip,
-                                          const std::filesystem::path& dir) {
+/// Each probe's FE value on each mesh level with every tip moved by `shift`.
+std::vector<std::vector<double>> loads_with_tips_moved(const std::filesystem::path& scene_file,
+                                                       const std::vector<std::string>& probes,
+                                                       double shift, const std::array<bool, 2>& tip,
+                                                       const std::filesystem::path& dir) {
   SceneVerifyOptions options;
   options.fe_levels = fe_levels;
-  const auto file = write_elastic_variant(scene_file, probe, shift, tip, dir / "scene.yaml");
-  return probe_levels(run_pd_fem(file, dir, options), probe);
+  const auto file = write_elastic_variant(scene_file, probes, shift, tip, dir / "scene.yaml");
+  const YAML::Node fe = run_pd_fem(file, dir, options);
+  std::vector<std::vector<double>> out;
+  for (const std::string& probe : probes) {
+    out.push_back(probe_levels(fe, probe));
+  }
+  return out;
 }
 
 /// pd-fem halves the mesh size from level to level: order-1 extrapolation to zero mesh size.
@@ -120,6 +126,16 @@ ComplianceGriffith griffith_load_from_fe_compliance(const std::filesystem::path&
                                                     const Scene& scene, const std::string& probe,
                                                     double grip_opening,
                                                     const std::filesystem::path& dir) {
+  return griffith_load_from_fe_compliance(scene_file, scene, {{probe, grip_opening}}, dir);
+}
+
+ComplianceGriffith griffith_load_from_fe_compliance(const std::filesystem::path& scene_file,
+                                                    const Scene& scene,
+                                                    const std::vector<GripPair>& grips,
+                                                    const std::filesystem::path& dir) {
+  if (grips.empty()) {
+    throw std::runtime_error("FE compliance: no grips");
+  }
   const std::array<bool, 2> tip = crack_tips(scene);
   const int tips = (tip[0] ? 1 : 0) + (tip[1] ? 1 : 0);
   const auto& v = scene.model.cracks[0].vertices;
@@ -129,22 +145,29 @@ ComplianceGriffith griffith_load_from_fe_compliance(const std::filesystem::path&
   const Material& m = scene.model.materials.at(0);
   const double g0 = m.fracture_energy.value_or(0);
   const double thickness = scene.model.dimension.thickness;
-  std::vector<std::vector<double>> loads; // at a − h, a, a + h
+  std::vector<std::string> probes;
+  for (const GripPair& g : grips) {
+    probes.push_back(g.probe);
+  }
+  std::vector<std::vector<std::vector<double>>> loads; // [a − h, a, a + h][probe][level]
   for (const auto& [name, step] : {std::pair{"shorter", -h}, {"as-given", 0.0}, {"longer", h}}) {
-    loads.push_back(loads_with_tips_moved(scene_file, probe, step, tip, dir / name));
+    loads.push_back(loads_with_tips_moved(scene_file, probes, step, tip, dir / name));
   }
   ComplianceGriffith out;
   out.crack_step = h;
-  for (std::size_t level = 0; level < loads[1].size(); ++level) {
-    // Each tip moves by 2h between the shorter and the longer crack.
-    const double dp_da = (loads[2][level] - loads[0][level]) / (tips * 2 * h * thickness);
-    const double g = -0.5 * grip_opening * dp_da;
+  for (std::size_t level = 0; level < loads[1][0].size(); ++level) {
+    double g = 0;
+    for (std::size_t p = 0; p < grips.size(); ++p) {
+      // Each tip moves by 2h between the shorter and the longer crack.
+      const double dp_da = (loads[2][p][level] - loads[0][p][level]) / (tips * 2 * h * thickness);
+      g -= 0.5 * grips[p].opening * dp_da;
+    }
     if (!(g > 0)) {
       throw std::runtime_error(fmt::format("FE compliance: the crack's energy release rate is {} "
                                            "(the force must fall as the crack grows)",
                                            g));
     }
-    out.level_loads.push_back(loads[1][level] * std::sqrt(g0 / g));
+    out.level_loads.push_back(loads[1][0][level] * std::sqrt(g0 / g));
   }
   out.failure_load = extrapolated(out.level_loads);
   return out;
@@ -165,7 +188,8 @@ ComplianceGrowth lefm_growth_from_fe_compliance(const std::filesystem::path& sce
   for (int k = -2; k <= points + 1; ++k) {
     const double shift = k * step;
     load[k] = extrapolated(
-        loads_with_tips_moved(scene_file, probe, shift, tip, dir / fmt::format("tip{:+d}", k)));
+        loads_with_tips_moved(scene_file, {probe}, shift, tip, dir / fmt::format("tip{:+d}", k))
+            .front());
   }
   ComplianceGrowth out;
   for (int k = 0; k < points; ++k) {

@@ -33,6 +33,19 @@ ComplianceGriffith griffith_load_from_fe_compliance(const std::filesystem::path&
                                                     double grip_opening,
                                                     const std::filesystem::path& dir);
 
+/// A pair of grips: the reaction probe of one and the opening between them.
+struct GripPair {
+  std::string probe;
+  double opening = 0;
+};
+
+/// The same where several pairs of grips load the body (a plate pulled both ways): at fixed
+/// grips G = −½ Σ Δ_g ∂P_g/∂A, and the failure load returned is the first pair's, P_1(a) √(G0/G).
+ComplianceGriffith griffith_load_from_fe_compliance(const std::filesystem::path& scene_file,
+                                                    const Scene& scene,
+                                                    const std::vector<GripPair>& grips,
+                                                    const std::filesystem::path& dir);
+
 /// LEFM's growth branch of the same body under a growing opening: at each crack length a0 + e
 /// (e = 0, s, 2s, …, the tip moved by e), the load and grip opening at which G = G0, from the FE
 /// compliance as above. dP/da is the fourth-order central difference on that grid (the tips

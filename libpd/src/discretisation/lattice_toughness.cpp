@@ -26,7 +26,10 @@
 // breaks are rank-one changes of the stiffness, solved with the Woodbury identity on one
 // factorisation), and the factor is the largest load multiplier a break needs once the tip has
 // moved past the first lattice periods (the crack's steady state). Dividing the energy-derived s0
-// by it makes the model's crack run at K_Ic, so failure loads converge to LEFM as δ falls.
+// by it makes the model's crack run at K_Ic under a pure K field. Specimens add their own T-stress
+// and, at a/δ of a few, more: a centre-cracked plate pulled one way fails within 5 % of LEFM, the
+// same plate pulled both ways (T = 0) 7–8 % low, a double cantilever beam 10–16 % low (verify
+// cases fracture-stop*, dcb*; open, issue 36).
 // The energy stored in the crossing bonds at this s0 is then G0 / factor²: the rest of G0 is what
 // each snapping bond releases into its neighbours (dissipated dynamically or by the static
 // solver's break events), which a global energy balance counts and a sum over bonds does not.

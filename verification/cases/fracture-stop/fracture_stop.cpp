@@ -33,7 +33,8 @@ struct Reference {
 };
 
 Reference griffith_reference(const Context& ctx, const std::filesystem::path& scene_file,
-                             const Scene& s, const std::string& fe_folder = "fe-compliance") {
+                             const Scene& s, const std::string& fe_folder = "fe-compliance",
+                             bool biaxial = false) {
   Reference ref;
   const double width = s.model.bodies.at(0).region.boxes.at(0).hi[0];
   ref.area = width * s.model.dimension.thickness;
@@ -48,16 +49,19 @@ Reference griffith_reference(const Context& ctx, const std::filesystem::path& sc
                              : m.youngs_modulus;
   ref.infinite = std::sqrt(e_prime * m.fracture_energy.value_or(0) / (pi * a));
   ref.feddersen = ref.infinite / std::sqrt(1 / std::cos(pi * a / width));
-  const auto grip = [&](const char* name) {
+  const auto grip = [&](const char* name, std::size_t axis) {
     for (const SupportSpec& support : s.model.supports) {
       if (support.name == name) {
-        return support.displacement[1];
+        return support.displacement[axis];
       }
     }
     throw std::runtime_error(std::string("fracture-stop: the scene has no support ") + name);
   };
-  ref.fe = griffith_load_from_fe_compliance(scene_file, s, "force", grip("top") - grip("bottom"),
-                                            ctx.output_dir / fe_folder);
+  std::vector<GripPair> grips{{"force", grip("top", 1) - grip("bottom", 1)}};
+  if (biaxial) { // the side strips work on the plate too as the crack grows
+    grips.push_back({"force-x", grip("right", 0) - grip("left", 0)});
+  }
+  ref.fe = griffith_load_from_fe_compliance(scene_file, s, grips, ctx.output_dir / fe_folder);
   ref.griffith = ref.fe.failure_load / ref.area;
   return ref;
 }
@@ -112,6 +116,22 @@ Json run_fracture_stop(const Context& ctx) {
   // of equilibrium states and depends on neither a ramp rate nor the number of load levels.
   const RunOutcome r = run_case_scene(ctx, s, "fracture-stop");
   const Reference ref = griffith_reference(ctx, scene_file, s);
+  record_failure(out, r, ref, ref.area, "this plate", start);
+  return out;
+}
+
+/// The same plate pulled equally both ways (no T-stress): the crack-tip problem the lattice
+/// toughness ratio is measured on (lattice_toughness.cpp), in a specimen.
+Json run_fracture_stop_biaxial(const Context& ctx) {
+  const auto start = std::chrono::steady_clock::now();
+  Json out;
+  out["case"] = "fracture-stop-biaxial";
+  out["quantity"] = "failure load of the fracture-stop plate under equal biaxial tension";
+  const auto scene_file = ctx.scenes_dir / "user/fracture-centre-crack-biaxial.yaml";
+  const Scene s = load_scene(scene_file.string());
+  const RunOutcome r = run_case_scene(ctx, s, "fracture-stop-biaxial");
+  const Reference ref =
+      griffith_reference(ctx, scene_file, s, "fracture-stop-biaxial-fe-compliance", true);
   record_failure(out, r, ref, ref.area, "this plate", start);
   return out;
 }
@@ -223,5 +243,6 @@ PD_VERIFICATION_RUN("fracture-stop", run_fracture_stop);
 PD_VERIFICATION_RUN("fracture-stop-3d", run_fracture_stop_3d_free);
 PD_VERIFICATION_RUN("fracture-stop-3d-slab", run_fracture_stop_3d_slab);
 PD_VERIFICATION_RUN("fracture-stop-convergence", run_fracture_stop_convergence);
+PD_VERIFICATION_RUN("fracture-stop-biaxial", run_fracture_stop_biaxial);
 
 } // namespace pd::verification
