@@ -491,10 +491,6 @@ SceneProblem translate_scene(const pd::Scene& scene) {
       if (!p.mesh_body->particle_element.empty())
         p.support_cells.push_back(cells_of(spec, particles, held));
     }
-  // Why: a load's cells become grid planes of the tensor-product grid (nested, exact) and, for
-  // region loads (layers, patches), faces of a Gmsh mesh. A point load's cells do not: many of
-  // them on a curved body made as many small features and slivers between them (80 loads on a
-  // hole failed after minutes); the load integrals resolve those cells by quadrature.
   for (pd::SupportSpec& s : p.supports) {
     p.support_layers.push_back(p.mesh_body || !s.region.only_boxes()
                                    ? std::nullopt
@@ -516,6 +512,10 @@ SceneProblem translate_scene(const pd::Scene& scene) {
       box.lo[a] = box.hi[a] = layer->at;
     }
   }
+  // Why: a load's cells become grid planes of the tensor-product grid (nested, exact) and, for
+  // region loads (layers, patches), faces of a Gmsh mesh. A point load's cells do not: many of
+  // them on a curved body made as many small features and slivers between them (80 loads on a
+  // hole failed after minutes); the load integrals resolve those cells by quadrature.
   for (const pd::LoadSpec& load : spec.loads) {
     p.loads.push_back(translate_load(spec, particles, load, p.mesh_body));
     const SceneLoad& l = p.loads.back();

@@ -23,8 +23,8 @@ constexpr int fe_levels = 2;
 constexpr double step_fraction = 0.1;
 
 /// The elastic problem of the scene with the crack's tips (ends inside the body, `tip`) moved
-/// outwards by `h` (inwards when negative): damage, stopping rules and output removed, the one
-/// probe kept.
+/// outwards by `h` (inwards when negative): damage, stopping rules and output removed, the probes
+/// `probes` kept.
 std::filesystem::path write_elastic_variant(const std::filesystem::path& scene_file,
                                             const std::vector<std::string>& probes, double h,
                                             const std::array<bool, 2>& tip,
@@ -212,12 +212,15 @@ ComplianceGrowth lefm_growth_from_fe_compliance(const std::filesystem::path& sce
 
 namespace {
 
-/// Log–log interpolation of y(x) on increasing x; NaN outside.
-double log_interpolate(const std::vector<double>& x, const std::vector<double>& y, double at) {
+/// y at `at` between the points (x, y), x increasing, interpolated linearly in log x (else x) and
+/// log y (else y); NaN outside the points.
+double interpolate(const std::vector<double>& x, const std::vector<double>& y, double at,
+                   bool log_x, bool log_y) {
   for (std::size_t k = 0; k + 1 < x.size(); ++k) {
     if (at >= x[k] && at <= x[k + 1]) {
-      const double t = std::log(at / x[k]) / std::log(x[k + 1] / x[k]);
-      return y[k] * std::pow(y[k + 1] / y[k], t);
+      const double t =
+          log_x ? std::log(at / x[k]) / std::log(x[k + 1] / x[k]) : (at - x[k]) / (x[k + 1] - x[k]);
+      return log_y ? y[k] * std::pow(y[k + 1] / y[k], t) : y[k] + t * (y[k + 1] - y[k]);
     }
   }
   return std::nan("");
@@ -226,17 +229,19 @@ double log_interpolate(const std::vector<double>& x, const std::vector<double>& 
 } // namespace
 
 double ComplianceGrowth::load_at(double at) const {
-  return log_interpolate(opening, load, at);
+  return interpolate(opening, load, at, true, true);
 }
 
 double ComplianceGrowth::extension_at(double at) const {
-  for (std::size_t k = 0; k + 1 < opening.size(); ++k) {
-    if (at >= opening[k] && at <= opening[k + 1]) {
-      const double t = std::log(at / opening[k]) / std::log(opening[k + 1] / opening[k]);
-      return extension[k] + t * (extension[k + 1] - extension[k]);
-    }
+  return interpolate(opening, extension, at, true, false);
+}
+
+double ComplianceGrowth::extension_at_compliance(double compliance) const {
+  std::vector<double> c(load.size());
+  for (std::size_t k = 0; k < c.size(); ++k) {
+    c[k] = opening[k] / load[k];
   }
-  return std::nan("");
+  return interpolate(c, extension, compliance, false, false);
 }
 
 } // namespace pd::verification

@@ -161,19 +161,6 @@ Growth measure_growth(const std::vector<CurvePoint>& curve, const ComplianceGrow
   return out;
 }
 
-/// The crack extension at which LEFM's compliance (Δ / P, rising with the crack) equals
-/// `compliance`, interpolated linearly; NaN outside the computed points.
-double extension_of_compliance(const ComplianceGrowth& lefm, double compliance) {
-  for (std::size_t k = 0; k + 1 < lefm.load.size(); ++k) {
-    const double c0 = lefm.opening[k] / lefm.load[k], c1 = lefm.opening[k + 1] / lefm.load[k + 1];
-    if (compliance >= c0 && compliance <= c1) {
-      return lefm.extension[k] +
-             (compliance - c0) / (c1 - c0) * (lefm.extension[k + 1] - lefm.extension[k]);
-    }
-  }
-  return std::nan("");
-}
-
 // Crack extension: along the crack plane (y = mid), each column of the two face rows (the
 // particles λ/2 above and below it) ahead of the pre-crack's tip counts the fraction of the
 // damage it would have with every bond across the plane broken; Σ fraction × λ is the length the
@@ -386,7 +373,7 @@ Json run_dcb(const Context& ctx, const std::string& name, double refine) {
   pd["bond_energy_at_break"] = bond_energy;
   pd["crack_extension"] = extension;
   pd["crack_length_final"] = a0 + extension;
-  pd["crack_length_from_compliance"] = a0 + extension_of_compliance(lefm, final_compliance);
+  pd["crack_length_from_compliance"] = a0 + lefm.extension_at_compliance(final_compliance);
   pd["final_opening"] = final_opening;
   pd["final_load"] = curve.empty() ? 0.0 : curve.back().load;
   pd["bonds_broken"] = summary_number(r.quasi_static, "bonds_broken");
