@@ -1,5 +1,7 @@
-// pd bench --lammps: one LAMMPS run through popen, parsed from its screen output.
+// pd bench --lammps: one LAMMPS run, parsed from its screen output.
 #include "lammps.hpp"
+
+#include "libpd/core/child_process.hpp"
 
 #include <algorithm>
 #include <cctype>
@@ -36,24 +38,17 @@ std::optional<LammpsRun> run_lammps(const std::string& lmp, const std::string& i
   const std::string cmd = fmt::format("OMP_NUM_THREADS=1 '{}' -in '{}' -log none -echo none "
                                       "-nocite -var steps {}{} 2>&1",
                                       lmp, input, steps, extra);
-  FILE* pipe = ::popen(cmd.c_str(), "r");
-  if (pipe == nullptr) {
-    return std::nullopt;
-  }
   LammpsRun r;
-  char line[4096];
-  while (std::fgets(line, sizeof line, pipe) != nullptr) {
-    const std::string_view l(line);
+  const int status = run_shell_command(cmd, [&r](std::string_view l) {
     // "Loop time of 5.603 on 1 procs for 600 steps with 5229 atoms"
     if (l.starts_with("Loop time of ")) {
-      r.loop_seconds = std::strtod(line + 13, nullptr);
+      r.loop_seconds = std::strtod(std::string(l.substr(13)).c_str(), nullptr);
     }
     // "Peridynamic bonds: ... total # of bonds = 639066" counts each bond from both ends.
     if (const auto at = l.find("total # of bonds = "); at != std::string_view::npos) {
-      r.bonds = std::strtoull(line + at + 19, nullptr, 10) / 2;
+      r.bonds = std::strtoull(std::string(l.substr(at + 19)).c_str(), nullptr, 10) / 2;
     }
-  }
-  const int status = ::pclose(pipe);
+  });
   if (status != 0 || r.loop_seconds <= 0 || r.bonds == 0) {
     return std::nullopt;
   }

@@ -88,6 +88,59 @@ class Interrupts(pdcli.TestCase):
         self.assertNotIn("failed", statuses)
         self.assertEqual(statuses[-1], "interrupted")
 
+    def test_verify_stops_its_fe_solver(self):
+        """A stop while pd-fem solves the FE reference: pd exits 5 and pd-fem does not run on
+        alone, writing into the folder (pd keeps the stop signals to itself, so it stops it)."""
+        fem = os.path.join(os.path.dirname(pdcli.PD), "pd-fem")
+        if not os.path.exists(fem):
+            self.skipTest("built without deal.II (no pd-fem)")
+        out = self.path("verify-fe")
+        scene = os.path.join(SCENES, "user", "plate-hole-2d.yaml")
+        p = subprocess.Popen([pdcli.PD, "verify", scene, "-o", out], stdout=subprocess.DEVNULL,
+                             stderr=subprocess.DEVNULL, cwd=self.dir)
+        pattern = f"pd-fem --scene .*{out}"
+        deadline = time.monotonic() + 120
+        while not self.fe_running(pattern):
+            self.assertIsNone(p.poll(), "pd verify ended before pd-fem started")
+            self.assertLess(time.monotonic(), deadline, "pd-fem did not start within 120 s")
+            time.sleep(0.02)
+        time.sleep(rng.uniform(0.05, 0.5))
+        t0 = time.monotonic()
+        p.send_signal(signal.SIGTERM)
+        status = p.wait(timeout=30)
+        took = time.monotonic() - t0
+        print(f"pd verify during pd-fem: exit {status} after {took:.2f} s")
+        self.assertEqual(status, 5)
+        self.assertLess(took, BOUND_SECONDS)
+        time.sleep(0.5)
+        self.assertFalse(self.fe_running(pattern), "pd-fem still runs after pd verify stopped")
+        with open(os.path.join(out, "summary.json")) as f:
+            self.assertEqual(json.load(f)["status"], "interrupted")
+
+    def test_pd_fem_stops_on_sigterm(self):
+        """pd-fem restarts itself at start (core/blas.hpp) with the stop signals blocked across
+        the exec; it must get them back, or a SIGTERM or Ctrl-C never reaches it (it ran on to
+        the end, exit 0)."""
+        fem = os.path.join(os.path.dirname(pdcli.PD), "pd-fem")
+        if not os.path.exists(fem):
+            self.skipTest("built without deal.II (no pd-fem)")
+        scene = os.path.join(SCENES, "user", "plate-hole-2d.yaml")
+        p = subprocess.Popen([fem, "--scene", scene, "-o", self.path("fe")],
+                             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+        first = p.stderr.readline()  # its first FE level (progress): well after the restart
+        self.assertIn("level 0/", first)
+        t0 = time.monotonic()
+        p.send_signal(signal.SIGTERM)
+        status = p.wait(timeout=60)
+        took = time.monotonic() - t0
+        print(f"pd-fem: SIGTERM after its first level, status {status} after {took:.2f} s")
+        self.assertEqual(status, -signal.SIGTERM)
+        self.assertLess(took, BOUND_SECONDS)
+
+    @staticmethod
+    def fe_running(pattern):
+        return subprocess.run(["pgrep", "-f", pattern], stdout=subprocess.DEVNULL).returncode == 0
+
     def test_bench(self):
         self.check(["bench", os.path.join(SCENES, "model-a-benchmark.yaml"), "--steps", "100000",
                     "--repeats", "1"], 0.05, 2.0, None)

@@ -2,6 +2,7 @@
 
 #include "libpd/app/run.hpp"
 #include "libpd/core/atomic_file.hpp"
+#include "libpd/core/child_process.hpp"
 #include "libpd/io/scene.hpp"
 
 #include <chrono>
@@ -157,7 +158,7 @@ YAML::Node run_pd_fem(const std::filesystem::path& scene, const std::filesystem:
   if (o.fe_coarse) {
     command += " --coarse";
   }
-  const int status = std::system(command.c_str());
+  const int status = run_shell_command(command);
   if (status != 0) {
     throw std::runtime_error(fmt::format("pd-fem failed (exit status {}): {}",
                                          WIFEXITED(status) ? WEXITSTATUS(status) : status,

@@ -2,13 +2,17 @@
 // phases that cannot poll it.
 #include "libpd/app/interrupt.hpp"
 
+#include "libpd/core/child_process.hpp"
+
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
 #include <cstdio>
 #include <mutex>
 #include <optional>
+#include <pthread.h>
 #include <thread>
+#include <time.h>
 #include <unistd.h>
 #include <vector>
 
@@ -25,6 +29,55 @@ extern "C" void on_stop_signal(int sig) {
   int none = 0;
   stop_signal.compare_exchange_strong(none, sig); // the first signal names the stop
 }
+
+sigset_t stop_set() {
+  sigset_t set;
+  sigemptyset(&set);
+  for (const int sig : stop_signals) {
+    sigaddset(&set, sig);
+  }
+  return set;
+}
+
+/// Takes the stop signals while hold_stop_requests is in force. Every thread of pd keeps them
+/// blocked (main blocks them before any library starts a thread, and threads inherit the mask),
+/// so they reach no handler: a library that installs its own for a while cannot take them.
+/// METIS does (GKlib's gk_sigtrap, during CHOLMOD's ordering): its handler turned a SIGTERM into
+/// an ordering error that CHOLMOD recovered from, and the request was lost.
+class Listener {
+public:
+  static Listener& instance() {
+    static Listener l;
+    return l;
+  }
+  void start() {
+    if (!thread_.joinable()) {
+      quit_ = false;
+      thread_ = std::thread([this] { listen(); });
+    }
+  }
+  void stop() {
+    if (thread_.joinable()) {
+      quit_ = true;
+      thread_.join();
+    }
+  }
+  ~Listener() { stop(); }
+
+private:
+  void listen() {
+    const sigset_t set = stop_set();
+    // Woken to look at quit_; a signal is taken at once.
+    const timespec tick{0, 50'000'000};
+    while (!quit_.load()) {
+      if (const int sig = ::sigtimedwait(&set, nullptr, &tick); sig > 0) {
+        on_stop_signal(sig);
+      }
+    }
+  }
+  std::thread thread_;
+  std::atomic<bool> quit_{false};
+};
 
 /// The watchdog of AbandonOnInterrupt: one thread while any is alive. A handler may not wake a
 /// condition variable, so the thread looks at the flag every `poll`; that delay is part of the
@@ -86,6 +139,9 @@ private:
           (**w)(sig);
         } catch (...) { // what could not be written is lost; the exit must still come
         }
+      }
+      if (const int pid = running_child(); pid > 0) {
+        ::kill(-pid, SIGTERM); // pd-fem of a verification: it would run on and write alone
       }
       std::fflush(stdout);
       std::fflush(stderr);
@@ -149,27 +205,31 @@ void hold_stop_requests() {
   sa.sa_handler = on_stop_signal;
   sigemptyset(&sa.sa_mask);
   sa.sa_flags = SA_RESTART;
-  sigset_t held;
-  sigemptyset(&held);
+  // The handler only for a thread some library starts with the signals unblocked.
   for (std::size_t k = 0; k < stop_signals.size(); ++k) {
     sigaction(stop_signals[k], &sa, &before_holding[k]);
-    sigaddset(&held, stop_signals[k]);
   }
+  const sigset_t held = stop_set();
+  pthread_sigmask(SIG_BLOCK, &held, nullptr);
   holding.store(true);
-  // Only now: a signal pending since the restart reaches the handler, not the default action.
-  sigprocmask(SIG_UNBLOCK, &held, nullptr);
+  // Started with the signals blocked, as it must be to wait for them; a signal pending since the
+  // restart is taken now.
+  Listener::instance().start();
 }
 
 void release_stop_requests() {
   if (!holding.exchange(false)) {
     return;
   }
+  Listener::instance().stop();
   for (std::size_t k = 0; k < stop_signals.size(); ++k) {
     sigaction(stop_signals[k], &before_holding[k], nullptr);
   }
   if (const int sig = stop_signal.exchange(0); sig != 0) {
-    ::raise(sig);
+    ::raise(sig); // pending until the signals are unblocked below, then their default action
   }
+  const sigset_t held = stop_set();
+  pthread_sigmask(SIG_UNBLOCK, &held, nullptr);
 }
 
 AbandonOnInterrupt::AbandonOnInterrupt(std::function<void(int signal)> write)

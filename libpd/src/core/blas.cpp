@@ -5,6 +5,7 @@
 #include <csignal>
 #include <cstdlib>
 #include <dlfcn.h>
+#include <string>
 #ifdef _OPENMP
 #include <omp.h>
 #endif
@@ -43,9 +44,39 @@ namespace {
 /// choice back out of its environment once libgomp has read it.
 constexpr const char* passive_marker = "PD_CHOSE_OMP_WAIT_POLICY";
 
+/// Set on the restart to the stop signals the program had unblocked before it (numbers, ','
+/// after each): the restart blocks them across exec, and a program that does not take them as
+/// requests (pd-fem) must get them back, or SIGTERM and Ctrl-C would never reach it.
+constexpr const char* unblock_marker = "PD_STOP_SIGNALS_TO_UNBLOCK";
+
+void unblock_what_the_restart_blocked() {
+  const char* list = std::getenv(unblock_marker);
+  if (list == nullptr) {
+    return;
+  }
+  sigset_t unblock;
+  sigemptyset(&unblock);
+  for (const char* p = list; *p != '\0';) {
+    char* end = nullptr;
+    const long sig = std::strtol(p, &end, 10);
+    if (end == p) {
+      break;
+    }
+    for (const int stop : stop_signals) {
+      if (sig == stop) {
+        sigaddset(&unblock, stop);
+      }
+    }
+    p = *end == ',' ? end + 1 : end;
+  }
+  unsetenv(unblock_marker);
+  sigprocmask(SIG_UNBLOCK, &unblock, nullptr);
+}
+
 } // namespace
 
 void restart_with_process_settings(char** argv) {
+  unblock_what_the_restart_blocked();
   if (std::getenv(passive_marker) != nullptr) {
     // libgomp has read it: programs pd starts (pd-fem, LAMMPS) see the user's environment.
     unsetenv("OMP_WAIT_POLICY");
@@ -71,7 +102,17 @@ void restart_with_process_settings(char** argv) {
       sigaddset(&stop, sig);
     }
     sigprocmask(SIG_BLOCK, &stop, &before);
+    std::string unblock;
+    for (const int sig : stop_signals) {
+      if (sigismember(&before, sig) == 0) {
+        unblock += std::to_string(sig) + ',';
+      }
+    }
+    if (!unblock.empty()) {
+      setenv(unblock_marker, unblock.c_str(), 1);
+    }
     execv("/proc/self/exe", argv);
+    unsetenv(unblock_marker);
     sigprocmask(SIG_SETMASK, &before, nullptr);
   }
 }

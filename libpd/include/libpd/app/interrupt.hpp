@@ -41,6 +41,11 @@ private:
 /// guard then takes over instead of forgetting, so that a stop during set-up still ends the run
 /// with status 5 and a summary rather than killing it. Also takes delivery of the signals that
 /// arrived while they were blocked across the restart of pd (core/blas.hpp).
+/// The calling thread must be the program's only one or every other thread must block the stop
+/// signals (pd's main blocks them before any library starts a thread): from here on they stay
+/// blocked in every thread and one thread of this file waits for them, so no handler a library
+/// installs for a while (METIS does, for SIGTERM) can take one. Programs started meanwhile get
+/// them unblocked through core/child_process.hpp, not std::system or popen.
 void hold_stop_requests();
 /// For a command that does not stop cleanly (pd info): the signals act as they did before
 /// hold_stop_requests, and one held meanwhile ends the process now, as it would have.

@@ -31,7 +31,10 @@ std::string openblas_core_for_this_cpu();
 ///    starts see the user's environment.
 /// A value the user set (OPENBLAS_CORETYPE, OMP_WAIT_POLICY or GOMP_SPINCOUNT) is kept; where the
 /// exec fails, the program runs on as it is. A program that links libpd itself sets
-/// OMP_WAIT_POLICY in its environment to the same effect.
+/// OMP_WAIT_POLICY in its environment to the same effect. The stop signals (core/stop_signals.hpp)
+/// are blocked across the exec, so that none is lost or fatal meanwhile; the restarted program
+/// gets back the ones it had unblocked (pd has them blocked from its first instruction and takes
+/// them itself, app/interrupt.hpp; pd-fem leaves them at their default action).
 void restart_with_process_settings(char** argv);
 
 /// Runs the BLAS on one thread while it lives, and restores the thread counts after. CHOLMOD's
