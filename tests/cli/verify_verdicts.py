@@ -113,6 +113,11 @@ class VerifyVerdicts(pdcli.TestCase):
         self.assertAlmostEqual(d["materials"][0]["poisson_ratio"], 1 / 3, places=15)
         fe = load(self.path("verify", "scene", "fe", "fe.json"))
         self.assertEqual(fe["materials"][0]["poisson_ratio"], d["materials"][0]["poisson_ratio"])
+        # PD solves the FE's linear problem: bond forces linearised, no rotation stiffening.
+        self.assertTrue(d["pd_small_displacements"])
+        pd_summary = load(self.path("verify", "scene", "pd", "summary.json"))
+        self.assertTrue(pd_summary["small_displacements"])
+        self.assertIn("small displacements", r.stdout)
         # The summary line and summary.json count it as measured, not as passed.
         self.assertIn("0 passed, 1 measured (no --gate), 0 failed", r.stdout)
         self.assertEqual(load(self.path("verify", "summary.json"))["status"], "measured")

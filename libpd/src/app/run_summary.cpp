@@ -66,6 +66,7 @@ Json run_summary(const Scene& scene, const Simulation& sim, const RunOutcome& ou
   j["spacing"] = scene.model.lattice.spacing;
   j["integrator"] = to_string(scene.solver.integrator);
   j["kernel"] = sim.forces().description();
+  j["small_displacements"] = scene.solver.small_displacements;
   j["effects"] = Json::array_of(model.effects.names());
   if (const std::string note = mesh_corrections_note(scene.model); !note.empty()) {
     j["mesh_corrections"] = note;

@@ -3,6 +3,8 @@
 #include "libpd/kernel/force_kernel.hpp"
 
 #include <cmath>
+#include <span>
+#include <vector>
 
 namespace pd {
 
@@ -141,7 +143,59 @@ private:
   std::unique_ptr<ForceEvaluator> inner_;
 };
 
+/// b = −K u, u = y − X (make_linearised_force_evaluator).
+class LinearisedForces final : public ForceEvaluator {
+public:
+  explicit LinearisedForces(Model& model) : model_(model), u_(3 * model.size()) {}
+  void compute(const double* y, double* b) override {
+    displacement(y);
+    apply_constrained_operator(model_, u_.data(), b);
+    for (double& v : std::span(b, u_.size())) {
+      v = -v;
+    }
+  }
+  /// Σ_i V_i Σ_j ¼ k_ij (n·(u_j − u_i))²: the kernel's Σ_i V_i ½ Σ_j w_ij V_j with w = ½ c s² |ξ|
+  /// at the linearised stretch s = n·(u_j − u_i)/|ξ|.
+  double strain_energy(const double* y) const override {
+    std::vector<double> u(y, y + u_.size());
+    for (std::size_t i = 0; i < model_.size(); ++i) {
+      for (std::size_t c = 0; c < 3; ++c) {
+        u[3 * i + c] -= model_.particles.position[i][c];
+      }
+    }
+    double energy = 0;
+    for (std::size_t i = 0; i < model_.size(); ++i) {
+      double row = 0;
+      for_each_linearised_bond(model_, i, BrokenBonds::left_out, [&](const LinearisedBond& b) {
+        double stretch = 0;
+        for (std::size_t c = 0; c < 3; ++c) {
+          stretch += b.direction[c] * (u[3 * b.neighbour + c] - u[3 * i + c]);
+        }
+        row += 0.25 * b.stiffness * stretch * stretch;
+      });
+      energy += model_.particles.volume[i] * row;
+    }
+    return energy;
+  }
+  std::string description() const override { return "linearised (small displacements)"; }
+
+private:
+  void displacement(const double* y) {
+    for (std::size_t i = 0; i < model_.size(); ++i) {
+      for (std::size_t c = 0; c < 3; ++c) {
+        u_[3 * i + c] = y[3 * i + c] - model_.particles.position[i][c];
+      }
+    }
+  }
+  Model& model_;
+  std::vector<double> u_;
+};
+
 } // namespace
+
+std::unique_ptr<ForceEvaluator> make_linearised_force_evaluator(Model& model) {
+  return std::make_unique<LinearisedForces>(model);
+}
 
 std::unique_ptr<ForceEvaluator> make_constrained_force_evaluator(Model& model) {
   auto inner = make_force_evaluator(model);

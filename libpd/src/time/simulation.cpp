@@ -48,7 +48,17 @@ Simulation::Simulation(Model& model, const SolverSpec& solver, const InitialSpec
 
   // Mirror dependants' forces go back to their images (Rᵀ) under consistent coupling, so every
   // integrator sees the symmetric constrained operator (discretisation/mirror_constraints.hpp).
-  forces_ = make_constrained_force_evaluator(model);
+  if (solver.small_displacements) {
+    if (model.effects.damage || model.effects.plasticity ||
+        model.effects.bond_model == BondModel::virtual_fibres ||
+        model.ownership.communicator().size() > 1) {
+      throw std::invalid_argument("solver.small_displacements: elastic bond-based models in one "
+                                  "process only");
+    }
+    forces_ = make_linearised_force_evaluator(model);
+  } else {
+    forces_ = make_constrained_force_evaluator(model);
+  }
   massless_ = massless_dependants(model);
   dt_stable_ = model.ownership.communicator().min(stable_time_step(model));
   IntegratorSettings is;

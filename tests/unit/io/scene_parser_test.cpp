@@ -1126,6 +1126,15 @@ TEST(SceneParser, ArkodeRejectsBondHistory) {
                        "cannot run the 'damage' effect"));
 }
 
+TEST(SceneParser, SmallDisplacementsRefuseBondHistory) {
+  std::string s = yaml(minimal);
+  s.replace(s.find("    density: 1000"), 17, "    density: 1000\n    critical_stretch: 0.01");
+  EXPECT_TRUE(fails_at(s + "  small_displacements: true\neffects: [damage]\n", 15, 24,
+                       "cannot run the 'damage' effect"));
+  EXPECT_TRUE(pd::parse_scene(yaml(minimal) + "  small_displacements: true\n", "s.yaml")
+                  .solver.small_displacements);
+}
+
 TEST(SceneParser, ArkodeAcceptsDamping) {
   if (!pd::arkode_available()) {
     GTEST_SKIP() << "built without SUNDIALS";

@@ -250,6 +250,28 @@ TEST(StaticSolver, NewtonConvergesOnASlenderCantileverUnderTheExactStretch) {
   EXPECT_NEAR(s.probes.at("tip") / -0.012, 1.0, 0.03);
 }
 
+TEST(StaticSolver, SmallDisplacementsSolveTheLinearProblem) {
+  // Under the exact stretch the slender cantilever's response is not linear in its load (the
+  // turned bonds stiffen it); with solver.small_displacements it is, as in the linear-elastic
+  // problem a finite-element reference solves (pd verify sets it).
+  const auto tip = [](double load, bool small) {
+    std::string text = slender_cantilever(2.0);
+    text.replace(text.find("[0, 0, -1e3]"), 12, fmt::format("[0, 0, {}]", load));
+    if (small) {
+      text.replace(text.find("  integrator: static\n"), 21,
+                   "  integrator: static\n  small_displacements: true\n");
+    }
+    const pd::RunOutcome s = run(text);
+    EXPECT_EQ(s.result.status, pd::RunStatus::converged) << s.result.message;
+    return s.probes.at("tip");
+  };
+  const double small = tip(-1e3, true), small_four = tip(-4e3, true);
+  const double finite = tip(-1e3, false), finite_four = tip(-4e3, false);
+  EXPECT_NEAR(small_four / (4 * small), 1.0, 1e-9);
+  EXPECT_GT(std::abs(finite_four / (4 * finite) - 1.0), 1e-4); // what the check above would see
+  EXPECT_NEAR(small / finite, 1.0, 0.01);                      // and the two agree while small
+}
+
 TEST(StaticSolver, LargeModelsWithGhostsSolveByCgPreconditionedWithTheRefittedOperator) {
   // 40 × 40 × 5 particles (24,000 unknowns, above preconditioned_from_unknowns) with the default
   // ghost layers, clamped by a quadratic mirror at x = 0: the factor is of P (the ghosts refitted

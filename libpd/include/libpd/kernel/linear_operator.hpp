@@ -97,4 +97,12 @@ void apply_constrained_operator(const Model& m, double* u, double* ku);
 /// (discretisation/mirror_constraints.hpp).
 std::unique_ptr<ForceEvaluator> make_constrained_force_evaluator(Model& model);
 
+/// The force of small displacements: b = −K (y − X) with the dependants' forces folded as
+/// make_constrained_force_evaluator folds them, and the energy ½ uᵀ V K u. K is the kernel's
+/// linearisation at the reference configuration (the same for every stretch measure), so this is
+/// the linear-elastic problem a finite-element reference solves, with no rotation stiffening
+/// (`solver.small_displacements`). Elastic bond-based models only: the caller refuses damage,
+/// plasticity and virtual fibres.
+std::unique_ptr<ForceEvaluator> make_linearised_force_evaluator(Model& model);
+
 } // namespace pd

@@ -44,6 +44,11 @@ struct SolverSpec {
   /// `integrator: static` with damage (quasi-static fracture, time/quasi_static.hpp): the
   /// prescribed displacements and loads are applied in this many equal levels.
   std::size_t load_steps = 10;
+  /// Bond forces linearised at the reference configuration (kernel/linear_operator.hpp,
+  /// make_linearised_force_evaluator): the linear-elastic problem of small displacements, which a
+  /// finite-element reference solves (pd verify sets it). Off: each bond's stretch measure at any
+  /// rotation. Elastic bond-based models only.
+  bool small_displacements = false;
   /// Stop as unstable when the kinetic energy outgrows the energy put in (time/energy_watch.hpp).
   /// Off only where a caller measures growth itself (pd stability's bounded runs).
   bool energy_check = true;

@@ -135,6 +135,16 @@ void check_solver(Reader& r, const Scene& scene, const Marks& marks) {
                : "add 'damage' to 'effects', or remove 'load_steps' (an elastic static solve is "
                  "one solve at the full load)");
   }
+  if (solver.small_displacements && (model.effects.damage || model.effects.plasticity ||
+                                     model.effects.bond_model == BondModel::virtual_fibres)) {
+    r.fail(sol.find("small_displacements")->at(),
+           fmt::format(
+               "'solver.small_displacements' linearises elastic bonds; it cannot run {}",
+               model.effects.bond_model == BondModel::virtual_fibres
+                   ? "the virtual-fibre model"
+                   : (model.effects.damage ? "the 'damage' effect" : "the 'plasticity' effect")),
+           "remove 'small_displacements', or the effect");
+  }
   if (solver.end_time && solver.ramp_time > *solver.end_time) {
     r.warn(sol.find("ramp_time")->at(),
            fmt::format("'solver.ramp_time' ({} s) exceeds 'solver.end_time' ({} s): the full load "

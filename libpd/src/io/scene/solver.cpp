@@ -112,6 +112,13 @@ constexpr Key solver_keys[] = {
      .range = at_least_one,
      .show = Show::commented,
      .bind = field_with_default<&SolverSpec::load_steps>()},
+    {.name = "small_displacements",
+     .type = Type::boolean,
+     .doc = "true: bond forces linearised at the reference configuration, the linear-elastic "
+            "problem a finite-element reference solves (pd verify sets it); false: each bond's "
+            "stretch measure at any rotation. Elastic bond-based models only",
+     .show = Show::commented,
+     .bind = field_with_default<&SolverSpec::small_displacements>()},
     {.name = "steady",
      .type = Type::section,
      .doc = "steady-state stop; its presence (even empty) enables it",
