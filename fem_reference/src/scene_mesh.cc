@@ -478,9 +478,30 @@ void gmsh_mesh(const SceneProblem& problem, const double h0, const unsigned int 
   grid_in.read_msh(in);
   if (!triangulation.all_reference_cells_are_hyper_cube())
     throw std::runtime_error("Gmsh left cells that are not quadrilaterals / hexahedra");
+  // Level 0 is chosen among valid meshes (SceneReference::make_grid); a split one must stay so.
+  if (level > 0 && has_inverted_cells(triangulation))
+    throw std::runtime_error("Gmsh's level-" + std::to_string(level) +
+                             " mesh (level 0 split that many times) has inverted cells");
   attach_manifolds(problem, triangulation);
 }
 
+template <int dim>
+bool has_inverted_cells(const Triangulation<dim>& triangulation) {
+  for (const auto& cell : triangulation.active_cell_iterators()) {
+    Point<dim> vertices[GeometryInfo<dim>::vertices_per_cell];
+    for (unsigned int v = 0; v < GeometryInfo<dim>::vertices_per_cell; ++v)
+      vertices[v] = cell->vertex(v);
+    Tensor<0, dim> jacobians[GeometryInfo<dim>::vertices_per_cell];
+    GeometryInfo<dim>::alternating_form_at_vertices(vertices, jacobians);
+    for (const auto& j : jacobians)
+      if (!(static_cast<double>(j) > 0))
+        return true;
+  }
+  return false;
+}
+
+template bool has_inverted_cells<2>(const Triangulation<2>&);
+template bool has_inverted_cells<3>(const Triangulation<3>&);
 template void box_grid<2>(const SceneProblem&, double, Triangulation<2>&);
 template void box_grid<3>(const SceneProblem&, double, Triangulation<3>&);
 template void gmsh_mesh<2>(const SceneProblem&, double, unsigned int, const std::filesystem::path&,

@@ -35,6 +35,11 @@ void box_grid(const SceneProblem& problem, double h, Triangulation<dim>& triangu
 template <int dim>
 void gmsh_mesh(const SceneProblem& problem, double h0, unsigned int level,
                const std::filesystem::path& msh_file, Triangulation<dim>& triangulation);
+// Whether a cell's vertices make it inverted or flat (a corner's Jacobian of the d-linear map is
+// not positive). Gmsh's tetrahedra subdivided into hexahedra can be: a 3D plate 1 cm thick with
+// a hole, meshed at 2 cm, had 8 such hexahedra of 828, and its stiffness matrix was indefinite.
+template <int dim>
+bool has_inverted_cells(const Triangulation<dim>& triangulation);
 // Level `level` of a mesh body's sequence (SceneProblem::mesh_body): its elements, as libpd
 // made the particles of them, split `level` times by Gmsh; `msh_file` receives it. Simplices.
 template <int dim>

@@ -168,12 +168,10 @@ void SceneReference<dim>::mesh(const double h0, const unsigned int level) {
     dof_handler = std::make_unique<DoFHandler<dim>>(triangulation);
 }
 
-// Why: box-only scenes get the tensor-product grid once and refine it globally (nested
-// meshes); scenes with curved shapes are meshed by Gmsh for every level (scene_mesh.h). The
-// level-0 size starts at the thinnest part of the body and doubles while three levels would
-// exceed the budget (thin layers keep their one cell across: the grid planes and Gmsh's
-// features bound the mesh from below). The DoFHandler is rebuilt with a new mesh: a
-// triangulation cannot be cleared under it.
+// Why: box grids are made once and refined globally; Gmsh meshes every level (scene_mesh.h).
+// The level-0 size starts at the body's thinnest part (halved while Gmsh's mesh has inverted
+// cells) and doubles while three levels would exceed the budget and a coarser valid mesh exists
+// (thin layers keep their one cell across). The DoFHandler is rebuilt with a new mesh.
 template <int dim>
 void SceneReference<dim>::make_grid(const unsigned int level) {
   if (level > 0) {
@@ -187,12 +185,14 @@ void SceneReference<dim>::make_grid(const unsigned int level) {
   }
   base_size = base_cell_size(problem, use_gmsh);
   mesh(base_size, 0);
+  for (int attempt = 0; attempt < 6 && has_inverted_cells(triangulation); ++attempt)
+    mesh(base_size /= 2, 0);
   for (int attempt = 0; attempt < 6; ++attempt) {
     const auto cells = triangulation.n_active_cells();
     if (estimated_dofs(dim, cells * std::pow(2., 2 * dim)) <= budget())
       break;
     mesh(2 * base_size, 0);
-    if (triangulation.n_active_cells() >= cells) { // no coarser mesh: keep the finer one
+    if (triangulation.n_active_cells() >= cells || has_inverted_cells(triangulation)) {
       mesh(base_size, 0);
       break;
     }

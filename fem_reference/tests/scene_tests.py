@@ -183,6 +183,29 @@ def notched_gmsh(args):
     return ok
 
 
+def plate_hole_3d(args):
+    """The plate with a hole through its thickness solves (its coarse Gmsh hexahedra were
+    inverted), and the hole adds compliance: at least what a hole in an infinite plate adds,
+    3 pi r^2 sigma / (E W) of end displacement (the finite width adds more), against the same plate
+    without the hole (the box grid)."""
+    scene = args.source / "tests/scenes/plate-hole-3d.yaml"
+    out = args.work / "scene-plate-hole-3d"
+    run([args.pd_fem, "--scene", scene, "--levels", "1", "-o", out])
+    with_hole = probe(fe_json(out / "fe.json"), "end_ux")["values"][0]
+    plain = args.work / "plate-no-hole-3d.yaml"
+    text = scene.read_text()
+    plain.write_text(text[:text.index("    minus:")] + text[text.index("supports:"):])
+    out_plain = args.work / "scene-plate-no-hole-3d"
+    run([args.pd_fem, "--scene", plain, "--levels", "1", "-o", out_plain])
+    without = probe(fe_json(out_plain / "fe.json"), "end_ux")["values"][0]
+    E, W, t, r, F = 200e9, 0.06, 0.01, 0.0125, 2e4
+    infinite_plate = 3 * math.pi * r**2 * (F / (W * t)) / (E * W)
+    added = with_hole - without
+    return check(infinite_plate <= added <= 2 * infinite_plate,
+                 f"plate-hole-3d end u_x {with_hole:.6e}, without the hole {without:.6e}: the hole"
+                 f" adds {added:.3e}, an infinite plate's hole {infinite_plate:.3e}")
+
+
 def kirsch_displacement(x, y, sigma, E, nu, a, centre):
     """Kirsch's plate with a hole of radius a under uniaxial tension sigma along x, plane
     stress: (u_x, u_y) at (x, y), zero at the centre (Barber, Elasticity, §8.4.1)."""
@@ -280,14 +303,14 @@ def main():
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("case",
                         choices=["cantilever", "bar-2d", "mesh-bar", "bar-3d-gmsh", "notched-gmsh", "kirsch",
-                                 "crack", "edge-crack", "hinge-grips"])
+                                 "crack", "edge-crack", "hinge-grips", "plate-hole-3d"])
     parser.add_argument("--pd-fem", type=Path, required=True)
     parser.add_argument("--source", type=Path, required=True, help="fem_reference/ folder")
     parser.add_argument("--work", type=Path, required=True)
     args = parser.parse_args()
     cases = {"cantilever": cantilever, "bar-2d": bar_2d, "mesh-bar": mesh_bar, "bar-3d-gmsh": bar_3d_gmsh,
              "notched-gmsh": notched_gmsh, "crack": crack, "edge-crack": edge_crack,
-             "kirsch": kirsch, "hinge-grips": hinge_grips}
+             "kirsch": kirsch, "hinge-grips": hinge_grips, "plate-hole-3d": plate_hole_3d}
     sys.exit(0 if cases[args.case](args) else 1)
 
 
