@@ -204,8 +204,9 @@ private:
         junit_case(cases, names_[k], name, tests == 1 ? seconds : 0.0, v, why, out);
       };
       const std::string not_judged = verdict == "interrupted" ? "interrupted before it finished"
-                                     : verdict == "measured"  ? "measured, not judged: no --gate"
-                                                              : std::string();
+                                     : verdict == "measured"
+                                         ? "measured, not judged: " + text_of(r, "not_judged")
+                                         : std::string();
       std::string reasons;
       if (const Json* list = r.find("reasons")) {
         reasons = list->dump(0);
@@ -293,7 +294,7 @@ int conclude(const Ledger& ledger, const InterruptGuard& interrupt, int failed) 
   }
   const std::size_t measured = ledger.count("measured");
   fmt::print("{} passed, {}{} failed\n", ledger.count("passed"),
-             measured > 0 ? fmt::format("{} measured (no --gate), ", measured) : std::string(),
+             measured > 0 ? fmt::format("{} measured (not judged), ", measured) : std::string(),
              failed);
   return failed > 0 ? 2 : 0;
 }
@@ -343,7 +344,8 @@ int verify_scenes(const VerifyArgs& a, const verification::Context& ctx) {
     const std::string verdict = result.find("verdict")->text().value_or("failed");
     fmt::print("   {} in {:.1f} s -> {}/{}.json\n", upper(verdict), wall, a.out_dir, name);
     if (verdict == "measured") {
-      fmt::print("   (no --gate: the differences are measured, not judged)\n");
+      fmt::print("   (measured, not judged: {})\n",
+                 result.find("not_judged")->text().value_or("no --gate"));
     }
     ledger.record(k, verdict, std::move(result));
     failed += verdict == "failed" ? 1 : 0;

@@ -2,6 +2,7 @@
 take one resolved material, a result without a tolerance is *measured*, an unconverged PD state
 is not a verified one, and nonsense gates are refused. Needs pd-fem (PD_FEM, set by CMake)."""
 import json
+import math
 import os
 import subprocess
 
@@ -119,8 +120,18 @@ class VerifyVerdicts(pdcli.TestCase):
         self.assertTrue(pd_summary["small_displacements"])
         self.assertIn("small displacements", r.stdout)
         # The summary line and summary.json count it as measured, not as passed.
-        self.assertIn("0 passed, 1 measured (no --gate), 0 failed", r.stdout)
+        self.assertIn("0 passed, 1 measured (not judged), 0 failed", r.stdout)
         self.assertEqual(load(self.path("verify", "summary.json"))["status"], "measured")
+
+    def tight_gate(self):
+        """A gate every probe's difference exceeds and the FE can still judge (its own error
+        estimate below half the tolerance), from a run with a loose gate."""
+        _, d = self.verify(self.static_scene(), "--gate", "0.5")
+        scales = [p["tolerance"] / 0.5 for p in d["probes"]]
+        fe = max(p["fe_error_estimate"] / s for p, s in zip(d["probes"], scales))
+        smallest = min(p["judged_difference"] for p in d["probes"])
+        self.assertLess(2 * fe, smallest, "the FE cannot tell PD's differences from its own")
+        return math.sqrt(2 * fe * smallest)
 
     def test_a_gate_judges_every_probe(self):
         r, d = self.verify(self.static_scene(), "--gate", "0.5")
@@ -129,9 +140,18 @@ class VerifyVerdicts(pdcli.TestCase):
         self.assertIn("1 passed, 0 failed", r.stdout)
         self.assertEqual(load(self.path("verify", "summary.json"))["status"], "passed")
         self.assertTrue(all(p["within_tolerance"] for p in d["probes"]))
-        r, d = self.verify(self.static_scene(), "--gate", "1e-9")
+        r, d = self.verify(self.static_scene(), "--gate", repr(self.tight_gate()))
         self.assertEqual(r.returncode, 2, r.stdout + r.stderr)
         self.assertEqual(d["verdict"], "failed")
+
+    def test_a_gate_the_fe_cannot_judge_is_measured(self):
+        """A tolerance below twice the FE's own error estimate gives no verdict: the reference
+        cannot tell PD's error from its own."""
+        r, d = self.verify(self.static_scene(), "--gate", "1e-9")
+        self.assertEqual(r.returncode, 0, r.stdout + r.stderr)
+        self.assertEqual(d["verdict"], "measured")
+        self.assertIn("the FE's own error estimate", d["not_judged"])
+        self.assertIn("0 passed, 1 measured (not judged), 0 failed", r.stdout)
 
     def test_an_unconverged_pd_run_is_not_verified(self):
         # Damped Euler stopped at end_time after a few steps: a transient, not an equilibrium.
@@ -172,7 +192,7 @@ class VerifyVerdicts(pdcli.TestCase):
 
     def test_junit_has_a_testcase_per_probe_and_validates(self):
         junit = self.path("verify.xml")
-        r, d = self.verify(self.static_scene(), "--gate", "1e-9", "--junit", junit)
+        r, d = self.verify(self.static_scene(), "--gate", repr(self.tight_gate()), "--junit", junit)
         self.assertEqual(r.returncode, 2, r.stdout + r.stderr)
         root = junit_schema.check(junit)
         suites = root.findall("testsuite")
@@ -182,7 +202,7 @@ class VerifyVerdicts(pdcli.TestCase):
         self.assertIsNone(cases["verdict"].find("failure"))  # same materials, an equilibrium
         for p in d["probes"]:
             failure = cases[p["name"]].find("failure")
-            self.assertIsNotNone(failure, p)  # no difference is within 1e-9
+            self.assertIsNotNone(failure, p)  # no difference is within the tight gate
             out = cases[p["name"]].find("system-out").text
             self.assertIn(f"PD {p['pd']:.9g}", out)
             self.assertIn(f"FE {p['fe']:.9g}", out)
