@@ -253,6 +253,17 @@ int run_parameter_file(const Arguments& args, const std::string& command_line) {
 }
 } // namespace
 
+namespace {
+// Before the libraries' initialisers (deal.II, Trilinos, PETSc, Open MPI): a SIGTERM or Ctrl-C
+// that arrived while the start-up restart had them blocked ends pd-fem now, not after loading.
+void take_back_stop_signals(int /*argc*/, char** /*argv*/, char** /*envp*/) {
+  pd::take_back_stop_signals_after_restart();
+}
+// NOLINTNEXTLINE: the ELF hook that runs before every shared library's initialiser.
+[[gnu::section(".preinit_array"),
+  gnu::used]] void (*const take_back_early)(int, char**, char**) = take_back_stop_signals;
+} // namespace
+
 int main(int argc, char** argv) {
   using namespace dealii;
   // The direct solves run CHOLMOD on OpenBLAS: its fast kernels on CPUs it does not recognise,

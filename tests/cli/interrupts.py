@@ -112,8 +112,12 @@ class Interrupts(pdcli.TestCase):
         print(f"pd verify during pd-fem: exit {status} after {took:.2f} s")
         self.assertEqual(status, 5)
         self.assertLess(took, BOUND_SECONDS)
-        time.sleep(0.5)
-        self.assertFalse(self.fe_running(pattern), "pd-fem still runs after pd verify stopped")
+        # A pd-fem signalled in its first moments holds the signal until its restart's libraries
+        # are loaded (core/blas.hpp), longer on a busy machine: it must end, not run its levels.
+        deadline = time.monotonic() + 10
+        while self.fe_running(pattern) and time.monotonic() < deadline:
+            time.sleep(0.05)
+        self.assertFalse(self.fe_running(pattern), "pd-fem still runs 10 s after pd verify stopped")
         with open(os.path.join(out, "summary.json")) as f:
             self.assertEqual(json.load(f)["status"], "interrupted")
 

@@ -75,6 +75,10 @@ void unblock_what_the_restart_blocked() {
 
 } // namespace
 
+void take_back_stop_signals_after_restart() {
+  unblock_what_the_restart_blocked();
+}
+
 void restart_with_process_settings(char** argv) {
   unblock_what_the_restart_blocked();
   if (std::getenv(passive_marker) != nullptr) {

@@ -37,6 +37,12 @@ std::string openblas_core_for_this_cpu();
 /// them itself, app/interrupt.hpp; pd-fem leaves them at their default action).
 void restart_with_process_settings(char** argv);
 
+/// The part of restart_with_process_settings that gives the restarted program back the stop
+/// signals it had unblocked, callable on its own before the libraries' initialisers run (from
+/// an ELF .preinit_array function: pd-fem's loading of deal.II and its stack would otherwise hold
+/// a SIGTERM for as long as it takes). Idempotent.
+void take_back_stop_signals_after_restart();
+
 /// Runs the BLAS on one thread while it lives, and restores the thread counts after. CHOLMOD's
 /// supernodal factorisation splits its dense blocks over the BLAS's threads, and Debian's
 /// OpenBLAS (the OpenMP build) takes as many as `--threads` gives OpenMP, so the factor's last
