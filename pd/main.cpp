@@ -34,11 +34,7 @@ namespace {
 /// main holds them as a stop request (pd::hold_stop_requests). Threads those initialisers start
 /// keep them blocked, so a signal always reaches a thread that takes it.
 void block_stop_signals(int /*argc*/, char** /*argv*/, char** /*envp*/) {
-  sigset_t stop;
-  sigemptyset(&stop);
-  for (const int sig : pd::stop_signals) {
-    sigaddset(&stop, sig);
-  }
+  const sigset_t stop = pd::stop_signal_set();
   sigprocmask(SIG_BLOCK, &stop, nullptr);
 }
 // NOLINTNEXTLINE: the ELF hook that runs before every shared library's initialiser.

@@ -147,9 +147,8 @@ void describe_sides(const Scene& scene, const YAML::Node& fe, Json& out) {
 /// model allows (elastic bonds), without the rotation stiffening of the finite stretch (the
 /// double cantilever's opened arms: 2.4 % of its force).
 void solve_small_displacements_where_the_model_allows(Scene& scene) {
-  const bool linearisable = !scene.model.effects.damage && !scene.model.effects.plasticity &&
-                            scene.model.effects.bond_model != BondModel::virtual_fibres;
-  scene.solver.small_displacements = scene.solver.small_displacements || linearisable;
+  scene.solver.small_displacements =
+      scene.solver.small_displacements || scene.model.effects.elastic_bonds_only();
 }
 
 /// Why PD's result cannot be compared with the FE's: different materials, a PD state that is

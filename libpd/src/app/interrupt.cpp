@@ -30,15 +30,6 @@ extern "C" void on_stop_signal(int sig) {
   stop_signal.compare_exchange_strong(none, sig); // the first signal names the stop
 }
 
-sigset_t stop_set() {
-  sigset_t set;
-  sigemptyset(&set);
-  for (const int sig : stop_signals) {
-    sigaddset(&set, sig);
-  }
-  return set;
-}
-
 /// Takes the stop signals while hold_stop_requests is in force. Every thread of pd keeps them
 /// blocked (main blocks them before any library starts a thread, and threads inherit the mask),
 /// so they reach no handler: a library that installs its own for a while cannot take them.
@@ -66,7 +57,7 @@ public:
 
 private:
   void listen() {
-    const sigset_t set = stop_set();
+    const sigset_t set = stop_signal_set();
     // Woken to look at quit_; a signal is taken at once.
     const timespec tick{0, 50'000'000};
     while (!quit_.load()) {
@@ -209,7 +200,7 @@ void hold_stop_requests() {
   for (std::size_t k = 0; k < stop_signals.size(); ++k) {
     sigaction(stop_signals[k], &sa, &before_holding[k]);
   }
-  const sigset_t held = stop_set();
+  const sigset_t held = stop_signal_set();
   pthread_sigmask(SIG_BLOCK, &held, nullptr);
   holding.store(true);
   // Started with the signals blocked, as it must be to wait for them; a signal pending since the
@@ -228,7 +219,7 @@ void release_stop_requests() {
   if (const int sig = stop_signal.exchange(0); sig != 0) {
     ::raise(sig); // pending until the signals are unblocked below, then their default action
   }
-  const sigset_t held = stop_set();
+  const sigset_t held = stop_signal_set();
   pthread_sigmask(SIG_UNBLOCK, &held, nullptr);
 }
 

@@ -49,7 +49,9 @@ constexpr const char* passive_marker = "PD_CHOSE_OMP_WAIT_POLICY";
 /// requests (pd-fem) must get them back, or SIGTERM and Ctrl-C would never reach it.
 constexpr const char* unblock_marker = "PD_STOP_SIGNALS_TO_UNBLOCK";
 
-void unblock_what_the_restart_blocked() {
+} // namespace
+
+void take_back_stop_signals_after_restart() {
   const char* list = std::getenv(unblock_marker);
   if (list == nullptr) {
     return;
@@ -73,14 +75,8 @@ void unblock_what_the_restart_blocked() {
   sigprocmask(SIG_UNBLOCK, &unblock, nullptr);
 }
 
-} // namespace
-
-void take_back_stop_signals_after_restart() {
-  unblock_what_the_restart_blocked();
-}
-
 void restart_with_process_settings(char** argv) {
-  unblock_what_the_restart_blocked();
+  take_back_stop_signals_after_restart();
   if (std::getenv(passive_marker) != nullptr) {
     // libgomp has read it: programs pd starts (pd-fem, LAMMPS) see the user's environment.
     unsetenv("OMP_WAIT_POLICY");
@@ -99,12 +95,8 @@ void restart_with_process_settings(char** argv) {
   if (changed) {
     // A stop request between here and the restarted program's handlers would kill it (exec
     // resets handlers): blocked, it stays pending across exec until pd takes it as a request.
-    sigset_t stop;
+    const sigset_t stop = stop_signal_set();
     sigset_t before;
-    sigemptyset(&stop);
-    for (const int sig : stop_signals) {
-      sigaddset(&stop, sig);
-    }
     sigprocmask(SIG_BLOCK, &stop, &before);
     std::string unblock;
     for (const int sig : stop_signals) {

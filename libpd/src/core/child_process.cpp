@@ -26,11 +26,7 @@ pid_t spawn_shell(const std::string& command, int stdout_fd, int close_fd) {
   posix_spawnattr_init(&attr);
   sigset_t none;
   sigemptyset(&none);
-  sigset_t stop;
-  sigemptyset(&stop);
-  for (const int sig : stop_signals) {
-    sigaddset(&stop, sig);
-  }
+  const sigset_t stop = stop_signal_set();
   posix_spawnattr_setsigmask(&attr, &none);
   posix_spawnattr_setsigdefault(&attr, &stop);
   // A process group of its own, so that stopping it reaches what the shell starts too.

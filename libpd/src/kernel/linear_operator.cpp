@@ -143,12 +143,21 @@ private:
   std::unique_ptr<ForceEvaluator> inner_;
 };
 
+/// u = y − X (3N values).
+void displacement_of(const Model& m, const double* y, double* u) {
+  for (std::size_t i = 0; i < m.size(); ++i) {
+    for (std::size_t c = 0; c < 3; ++c) {
+      u[3 * i + c] = y[3 * i + c] - m.particles.position[i][c];
+    }
+  }
+}
+
 /// b = −K u, u = y − X (make_linearised_force_evaluator).
 class LinearisedForces final : public ForceEvaluator {
 public:
   explicit LinearisedForces(Model& model) : model_(model), u_(3 * model.size()) {}
   void compute(const double* y, double* b) override {
-    displacement(y);
+    displacement_of(model_, y, u_.data());
     apply_constrained_operator(model_, u_.data(), b);
     for (double& v : std::span(b, u_.size())) {
       v = -v;
@@ -157,12 +166,8 @@ public:
   /// Σ_i V_i Σ_j ¼ k_ij (n·(u_j − u_i))²: the kernel's Σ_i V_i ½ Σ_j w_ij V_j with w = ½ c s² |ξ|
   /// at the linearised stretch s = n·(u_j − u_i)/|ξ|.
   double strain_energy(const double* y) const override {
-    std::vector<double> u(y, y + u_.size());
-    for (std::size_t i = 0; i < model_.size(); ++i) {
-      for (std::size_t c = 0; c < 3; ++c) {
-        u[3 * i + c] -= model_.particles.position[i][c];
-      }
-    }
+    std::vector<double> u(u_.size());
+    displacement_of(model_, y, u.data());
     double energy = 0;
     for (std::size_t i = 0; i < model_.size(); ++i) {
       double row = 0;
@@ -180,15 +185,8 @@ public:
   std::string description() const override { return "linearised (small displacements)"; }
 
 private:
-  void displacement(const double* y) {
-    for (std::size_t i = 0; i < model_.size(); ++i) {
-      for (std::size_t c = 0; c < 3; ++c) {
-        u_[3 * i + c] = y[3 * i + c] - model_.particles.position[i][c];
-      }
-    }
-  }
   Model& model_;
-  std::vector<double> u_;
+  std::vector<double> u_; ///< compute()'s displacement, kept between calls
 };
 
 } // namespace

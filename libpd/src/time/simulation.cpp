@@ -49,9 +49,7 @@ Simulation::Simulation(Model& model, const SolverSpec& solver, const InitialSpec
   // Mirror dependants' forces go back to their images (Rᵀ) under consistent coupling, so every
   // integrator sees the symmetric constrained operator (discretisation/mirror_constraints.hpp).
   if (solver.small_displacements) {
-    if (model.effects.damage || model.effects.plasticity ||
-        model.effects.bond_model == BondModel::virtual_fibres ||
-        model.ownership.communicator().size() > 1) {
+    if (!model.effects.elastic_bonds_only() || model.ownership.communicator().size() > 1) {
       throw std::invalid_argument("solver.small_displacements: elastic bond-based models in one "
                                   "process only");
     }

@@ -20,11 +20,7 @@ extern "C" void library_handler(int) {
 
 /// What pd's main does before any library starts a thread (pd/main.cpp), then hold.
 void hold_as_pd_does() {
-  sigset_t stop;
-  sigemptyset(&stop);
-  for (const int sig : pd::stop_signals) {
-    sigaddset(&stop, sig);
-  }
+  const sigset_t stop = pd::stop_signal_set();
   pthread_sigmask(SIG_BLOCK, &stop, nullptr);
   pd::hold_stop_requests();
 }

@@ -10,19 +10,11 @@
 
 namespace {
 
-void block_stop_signals() {
-  sigset_t stop;
-  sigemptyset(&stop);
-  for (const int sig : pd::stop_signals) {
-    sigaddset(&stop, sig);
-  }
-  pthread_sigmask(SIG_BLOCK, &stop, nullptr);
-}
-
 TEST(ChildProcess, AChildCanBeStoppedWhileTheParentBlocksTheStopSignals) {
   // As pd holds them (app/interrupt.hpp). std::system would hand the child this mask: the shell's
   // SIGTERM to itself would wait, blocked, and the child would exit 7.
-  block_stop_signals();
+  const sigset_t stop = pd::stop_signal_set();
+  pthread_sigmask(SIG_BLOCK, &stop, nullptr);
   const int status = pd::run_shell_command("kill -TERM $$; exit 7");
   ASSERT_TRUE(WIFSIGNALED(status)) << "wait status " << status;
   EXPECT_EQ(WTERMSIG(status), SIGTERM);

@@ -12,4 +12,14 @@ namespace pd {
 
 inline constexpr std::array<int, 4> stop_signals{SIGINT, SIGTERM, SIGHUP, SIGUSR1};
 
+/// stop_signals as a set, for sigprocmask, sigtimedwait and posix_spawn.
+inline sigset_t stop_signal_set() {
+  sigset_t set;
+  sigemptyset(&set);
+  for (const int sig : stop_signals) {
+    sigaddset(&set, sig);
+  }
+  return set;
+}
+
 } // namespace pd

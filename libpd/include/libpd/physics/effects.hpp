@@ -23,6 +23,12 @@ struct EffectSet {
   bool damping = false;    ///< kinematic damping in the integrator (Miranda §3.2)
   bool body_force = false; ///< external force density on particles
 
+  /// Elastic bonds only (no damage, plasticity or virtual fibres): what
+  /// `solver.small_displacements` can linearise.
+  bool elastic_bonds_only() const {
+    return !damage && !plasticity && bond_model != BondModel::virtual_fibres;
+  }
+
   /// Names as printed in summaries, e.g. {"stretch:fast", "damage", "per-bond-field"}.
   std::vector<std::string> names() const;
 };

@@ -135,8 +135,7 @@ void check_solver(Reader& r, const Scene& scene, const Marks& marks) {
                : "add 'damage' to 'effects', or remove 'load_steps' (an elastic static solve is "
                  "one solve at the full load)");
   }
-  if (solver.small_displacements && (model.effects.damage || model.effects.plasticity ||
-                                     model.effects.bond_model == BondModel::virtual_fibres)) {
+  if (solver.small_displacements && !model.effects.elastic_bonds_only()) {
     r.fail(sol.find("small_displacements")->at(),
            fmt::format(
                "'solver.small_displacements' linearises elastic bonds; it cannot run {}",
