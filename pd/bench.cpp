@@ -11,6 +11,7 @@
 #include "commands.hpp"
 #include "lammps.hpp"
 #include "libpd/app/run.hpp"
+#include "libpd/core/threads.hpp"
 #include "libpd/kernel/force_kernel.hpp"
 
 #include <algorithm>
@@ -104,6 +105,9 @@ std::optional<Timings> time_evaluations(const BenchArgs& a, const Model& model,
   OtherCpuMeter others;
   t.load_before = load_average();
   for (int r = 0; r < repeats; ++r) {
+    // The default follows the idle processors (core/threads.hpp); read before LAMMPS runs, which
+    // the readings would count as another program's load.
+    refresh_thread_count();
     if (!a.lammps.empty() && !time_lammps(a, t)) {
       return std::nullopt;
     }

@@ -2,11 +2,13 @@
 #include "common.hpp"
 
 #include "libpd/core/text.hpp"
+#include "libpd/core/threads.hpp"
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <fmt/format.h>
 #include <fstream>
@@ -29,6 +31,8 @@ void set_threads(int threads) {
       threads = processors;
     }
     omp_set_num_threads(threads);
+  } else if (std::getenv("OMP_NUM_THREADS") == nullptr) {
+    follow_idle_processors(true); // core/threads.hpp: the processors other programs leave idle
   }
 #else
   (void)threads;
@@ -44,7 +48,9 @@ int thread_count() {
 }
 
 void add_threads_option(CLI::App& command, int& threads) {
-  command.add_option("--threads", threads, "OpenMP threads, at least 1 (default: all)")
+  command
+      .add_option("--threads", threads,
+                  "OpenMP threads, at least 1 (default: the processors other programs leave idle)")
       ->check(CLI::Range(1, 1 << 20));
 }
 

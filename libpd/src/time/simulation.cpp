@@ -1,6 +1,7 @@
 #include "libpd/time/simulation.hpp"
 
 #include "libpd/core/binary_state.hpp"
+#include "libpd/core/threads.hpp"
 #include "libpd/kernel/linear_operator.hpp"
 #include "libpd/kernel/round_off.hpp"
 #include "libpd/kernel/stable_time_step.hpp"
@@ -300,6 +301,7 @@ RunResult Simulation::run(const Observer& observer) {
       r.status = RunStatus::max_steps;
       break;
     }
+    refresh_thread_count(); // between steps: no parallel region is open
     const StepReport rep = integrator_->step(state_, dt_);
     if (!(rep.max_displacement_squared <= blowup_squared_)) {
       r.status = RunStatus::unstable;

@@ -44,8 +44,8 @@ std::string simd_target_name();
 /// Below this many directed bonds the SIMD kernel runs on one thread. On a quiet machine
 /// (`pd-kernel-bench --benchmark_filter=Threshold`) a second thread pays from about 20,000
 /// directed bonds, nearly doubling the rate at the clamped beam's size; the threshold sits a
-/// little above that. Under load the second thread can lose at every size: that is a reason for
-/// `--threads 1` on a busy machine, not for a higher threshold.
+/// little above that. Under load the second thread can lose at every size: that is for the
+/// thread policy to answer (core/threads.hpp: pd follows the idle processors), not the threshold.
 inline constexpr std::size_t simd_parallel_min_bonds = 32768;
 
 /// Calls each of `phases(first, last)` in turn once per thread of one parallel region (one thread
