@@ -21,6 +21,9 @@ Stages (each cached under DIR/cache/ by a hash of its inputs; see reports/README
   fibre-bench  `pd bench SCENE --bond-model M --json`: the virtual-fibre and bond-based kernels alternated.
   threads-under-load  the clamped beam, the plate and Model A on the default threads and on one,
                beside one busy process per core (started and killed by the stage).
+  mesh-setup   (--full) `pd run verification/scenes/benchmarks/mesh-body-benchmark.yaml`: set-up
+               time and memory of a CAD part meshed by Gmsh and filled with about a million
+               lattice sites.
 Output: DIR/index.html, DIR/*.png, DIR/report.json, DIR/data/*.json (stage records).
 Exit code: 0 all stages ran and all gates passed, 2 a verification gate failed, 1 a stage failed.
 """
@@ -60,6 +63,7 @@ from pdreport import cases as case_files  # noqa: E402
 from pdreport import compare as cmp  # noqa: E402
 from pdreport import stages as S  # noqa: E402
 from pdreport import timing  # noqa: E402
+from pdreport.mesh_setup import mesh_setup_stage  # noqa: E402
 from pdreport.threads_under_load import threads_under_load_stage  # noqa: E402
 
 ROOT = HERE.parent
@@ -122,6 +126,8 @@ def build_stages(ctx: S.Ctx, records: dict[str, dict]) -> list[S.Stage]:
         stages.append(S.lammps_stage(ctx))
     stages.append(S.fibre_bench_stage(ctx))
     stages.append(threads_under_load_stage(ctx))
+    if ctx.full:  # a million-particle CAD part: a minute or more
+        stages.append(mesh_setup_stage(ctx))
     stages.append(S.mpi_stage(ctx))
     return stages
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 from . import records as R
 from .fmt import esc, fnum
 from .markup import failed_box, num_td, table
+from .mesh_setup import mesh_setup_block
 from .page import Page, plt
 
 
@@ -56,6 +57,8 @@ def section(page: Page) -> str:
     parts.append(peer_block(page))
     parts.append("<h3>Default threads against one thread beside a competing load</h3>")
     parts.append(threads_under_load_block(page))
+    parts.append("<h3>Set-up of a part from CAD with a million particles</h3>")
+    parts.append(mesh_setup_block(page))
     parts.append("<h3>LAMMPS peri/pmb beside libpd (Model A, 1 thread)</h3>")
     parts.append(lammps_block(page, libpd_1t))
     parts.append("<h3>Bonds per particle (infinite lattice) beside Miranda Table 1</h3>")
