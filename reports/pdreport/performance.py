@@ -67,8 +67,10 @@ def section(page: Page) -> str:
     return "".join(parts)
 
 
-# Issue 16's targets for the same-run ratio, per configuration (stretch, damage).
-PEER_TARGETS = {("exact", False): 12.0, ("exact", True): 11.0, ("fast", False): 16.0}
+# Issue 41's targets for the same-run ratio, per configuration (stretch, damage). They were set
+# from figures measured where the kernel runs on AVX-512; the table names the instruction set
+# each row ran on, and a machine with AVX2 only is not expected to meet them.
+PEER_TARGETS = {("exact", False): 15.0, ("exact", True): 13.0, ("fast", False): 17.0}
 
 
 def load_note(run: dict) -> str:
@@ -123,7 +125,9 @@ def peer_block(page: Page) -> str:
         target = PEER_TARGETS.get((r["stretch"], r["damage"]))
         ratio = r.get("ratio_to_lammps")
         met = ratio is not None and target is not None and ratio >= target
-        rows.append([esc(r["stretch"] + (" + damage" if r["damage"] else "")),
+        path = r.get("kernel", "").rpartition("path=")[2]
+        rows.append([esc(r["stretch"] + (" + damage" if r["damage"] else "")
+                         + (f" ({path})" if path else "")),
                      num_td(fnum(r.get("bond_updates_per_second"))),
                      num_td(fnum(r.get("lammps_bond_updates_per_second"))),
                      num_td(f"{ratio:.2f}×" if ratio is not None else "–"),
