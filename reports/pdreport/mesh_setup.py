@@ -37,6 +37,11 @@ def mesh_setup_stage(ctx: Ctx) -> Stage:
                  [ctx.pd, scene, scene.with_suffix(".geo")], fn, default_seconds=150)
 
 
+def _plain(loadavg: object) -> str:
+    """"['0.70', '1.15', '1.69']" (how the stages record it) as "0.70 1.15 1.69"."""
+    return " ".join(str(loadavg).strip("[]").replace("'", "").split(", "))
+
+
 def mesh_setup_block(page: Page) -> str:
     rec = page.rec.get("mesh-setup")
     if rec is None:
@@ -45,10 +50,12 @@ def mesh_setup_block(page: Page) -> str:
         return failed_box(rec, "the mesh-setup stage")
     r = rec["result"]
     setup = r.get("setup") or {}
+    parts = [setup.get(k) for k in ("scene_seconds", "model_seconds", "simulation_seconds")]
+    total = sum(parts) if all(isinstance(p, (int, float)) for p in parts) else None
     mib = 1024.0 * 1024.0
     row = [num_td(fnum(r.get("particles"))), num_td(fnum(r.get("bonds"))),
-           num_td(fnum(setup.get("scene_seconds"), 3)), num_td(fnum(setup.get("model_seconds"), 3)),
-           num_td(fnum(setup.get("simulation_seconds"), 3)), num_td(fnum(r.get("setup_seconds"), 3)),
+           num_td(fnum(parts[0], 3)), num_td(fnum(parts[1], 3)), num_td(fnum(parts[2], 3)),
+           num_td(fnum(total, 3)),
            num_td(fnum((r.get("memory_bytes") or 0) / mib, 4)),
            num_td(fnum((r.get("peak_memory_bytes") or 0) / mib, 4))]
     return (f'<p class="note"><code>pd run {esc(r["scene"])}</code> (pd\'s default threads): the '
@@ -56,6 +63,7 @@ def mesh_setup_block(page: Page) -> str:
             "lattice spacing and filled with the lattice sites inside them (the default for a "
             "geometry file), one explicit step. Scene: reading the scene, meshing, locating the "
             "sites; model: families, weights, ghost layers; simulation: the integrator's set-up. Load average before "
-            f'{esc(r.get("loadavg_before"))}, after {esc(r.get("loadavg_after"))}.</p>' +
-            table(["particles", "bonds", "scene (s)", "model (s)", "simulation (s)", "set-up (s)",
+            f'{esc(_plain(r.get("loadavg_before")))}, after {esc(_plain(r.get("loadavg_after")))}.'
+            "</p>" +
+            table(["particles", "bonds", "scene (s)", "model (s)", "simulation (s)", "set-up in all (s)",
                    "model memory (MiB)", "peak memory (MiB)"], [row], 'id="mesh-setup-table"'))
