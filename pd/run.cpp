@@ -3,6 +3,7 @@
 #include "libpd/app/run.hpp"
 
 #include "commands.hpp"
+#include "libpd/app/interrupt.hpp"
 #include "libpd/app/run_checkpoints.hpp"
 #include "libpd/app/run_summary.hpp"
 #include "libpd/core/communicator.hpp"
@@ -90,7 +91,16 @@ int run(const RunArgs& a) {
   }
   set_threads(a.threads);
   const auto start = std::chrono::steady_clock::now();
-  const Scene scene = load_or_explain(a.scene);
+  // Reading a scene can take minutes (Gmsh meshing a CAD part) and cannot poll a stop request;
+  // the output folder is not claimed yet, so an abandoned read writes nothing there.
+  const Scene scene = [&a] {
+    const AbandonOnInterrupt abandon([&a](int sig) {
+      fmt::print(stderr,
+                 "pd run: interrupted by signal {} ({}) while reading {}: nothing written\n", sig,
+                 ::strsignal(sig), a.scene);
+    });
+    return load_or_explain(a.scene);
+  }();
   RunOptions opt;
   opt.scene_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -80,6 +80,14 @@ class Interrupts(pdcli.TestCase):
             self.check(["run", scene, "-o", out], 0.05, 2.0, os.path.join(out, "summary.json"),
                        sig)
 
+    def test_run_while_gmsh_meshes_the_scene(self):
+        """Reading a CAD part's scene meshes it (minutes for the benchmark part) before the run
+        claims its folder: a stop then ends pd with status 5 and writes nothing there."""
+        out = self.path("meshing")
+        scene = os.path.join(SCENES, "benchmarks", "mesh-body-benchmark.yaml")
+        self.check(["run", scene, "-o", out], 1.0, 3.0, None)
+        self.assertFalse(os.path.exists(out), "an abandoned scene read created the output folder")
+
     def test_verify_marks_nothing_failed(self):
         out = self.path("verify")
         s = self.check(["verify", "clamped-beam-fast", "cantilever-fast", "-o", out], 0.05, 1.5,
