@@ -301,7 +301,11 @@ RunResult Simulation::run(const Observer& observer) {
       r.status = RunStatus::max_steps;
       break;
     }
-    refresh_thread_count(); // between steps: no parallel region is open
+    // Between steps no parallel region is open; every 64th, so that the smallest models do not
+    // pay for the reading.
+    if ((state_.step - first_step) % 64 == 0) {
+      refresh_thread_count();
+    }
     const StepReport rep = integrator_->step(state_, dt_);
     if (!(rep.max_displacement_squared <= blowup_squared_)) {
       r.status = RunStatus::unstable;
