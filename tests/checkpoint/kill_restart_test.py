@@ -55,7 +55,7 @@ VARIANTS = {
 
 # Fields of summary.json that legitimately differ between the two runs.
 VOLATILE = {"wall_seconds", "bond_updates_per_second", "setup_seconds", "setup", "solve_seconds",
-            "peak_memory_bytes", "checkpoint",
+            "peak_memory_bytes", "checkpoint", "threads",
             "force_evaluations_this_run", "stop_signal",
             "restarted_from"}
 

@@ -1,6 +1,8 @@
 // summary.json of a run.
 #include "libpd/app/run_summary.hpp"
 
+#include "libpd/core/threads.hpp"
+
 #include <fstream>
 #include <string>
 #include <utility>
@@ -100,6 +102,9 @@ Json run_summary(const Scene& scene, const Simulation& sim, const RunOutcome& ou
     j["distribution"] = out.distribution;
   }
   j["peak_memory_bytes"] = peak_resident_bytes();
+  // What the times were measured on: the threads at the end, fixed or following core/threads.hpp.
+  j["threads"] = current_thread_count();
+  j["threads_follow_idle_processors"] = following_idle_processors();
   if (Json details = sim.integrator().summary(); details.is_object()) {
     j["integrator_details"] = std::move(details);
   }

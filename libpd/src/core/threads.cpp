@@ -143,6 +143,14 @@ bool following_idle_processors() {
   return following;
 }
 
+int current_thread_count() {
+#ifdef _OPENMP
+  return omp_get_max_threads();
+#else
+  return 1;
+#endif
+}
+
 void refresh_thread_count() {
 #ifdef _OPENMP
   if (!following) {

@@ -38,6 +38,9 @@ void follow_idle_processors(bool on);
 /// Whether follow_idle_processors is on.
 bool following_idle_processors();
 
+/// The OpenMP threads a parallel region started now would use (1 without OpenMP).
+int current_thread_count();
+
 /// Sets the OpenMP thread count from the background readings when follow_idle_processors is on
 /// (an atomic read otherwise). Loops that run long (time steps, a static solve, benchmark
 /// repeats) call it between parallel regions, from the thread that starts them.
