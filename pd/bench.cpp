@@ -134,7 +134,7 @@ void print_text(const BenchArgs& a, const Model& model, const ForceEvaluator& fo
                 const Timings& t) {
   const double median = median_of(t.seconds);
   fmt::print("{}: {} particles, {} bonds, kernel {}, {} threads\n", a.scene, model.size(),
-             model.family.bond_count(), forces.description(), thread_count());
+             model.family.bond_count(), forces.description(), current_thread_count());
   fmt::print("{} evaluations: median {:.4f} s of {} repeats -> {:.4g} bond updates/s\n", a.steps,
              median, t.seconds.size(),
              bond_updates_per_second(model.family.bond_count(), a.steps, median));
@@ -156,7 +156,7 @@ void print_json(const BenchArgs& a, const Model& model, const ForceEvaluator& fo
   Json j;
   j["scene"] = a.scene;
   j["kernel"] = forces.description();
-  j["threads"] = thread_count();
+  j["threads"] = current_thread_count();
   j["particles"] = model.size();
   j["bonds"] = model.family.bond_count();
   j["steps"] = a.steps;

@@ -39,14 +39,6 @@ void set_threads(int threads) {
 #endif
 }
 
-int thread_count() {
-#ifdef _OPENMP
-  return omp_get_max_threads();
-#else
-  return 1;
-#endif
-}
-
 void add_threads_option(CLI::App& command, int& threads) {
   command
       .add_option("--threads", threads,

@@ -39,12 +39,12 @@ struct Command {
   bool stops_cleanly = false;
 };
 
-/// OpenMP threads for this process; 0 keeps the default (all). More threads than the machine
-/// has processors are capped to that number, with a warning (oversubscribed threads only wait
-/// for each other: 10,000 threads ran 230× slower).
+/// OpenMP threads for this process; 0: the processors other programs leave idle, followed during
+/// the run (core/threads.hpp), unless OMP_NUM_THREADS says otherwise. More threads than the
+/// machine has processors are capped to that number, with a warning (oversubscribed threads only
+/// wait for each other: 10,000 threads ran 230× slower).
 void set_threads(int threads);
-int thread_count();
-/// --threads N, N ≥ 1 (not given: all processors).
+/// --threads N, N ≥ 1 (not given: set_threads(0)).
 void add_threads_option(CLI::App& command, int& threads);
 
 /// Largest count (steps, repeats, evaluations) any option takes: beyond it a run would not end in

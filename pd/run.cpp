@@ -8,6 +8,7 @@
 #include "libpd/app/run_summary.hpp"
 #include "libpd/core/communicator.hpp"
 #include "libpd/core/text.hpp"
+#include "libpd/core/threads.hpp"
 
 #include <chrono>
 #include <cstring>
@@ -48,7 +49,8 @@ void print_report(const RunArgs& a, const RunOptions& opt, const RunOutcome& out
              "s, peak memory {:.1f} MiB, {} threads\n",
              out.setup_seconds + scene_seconds, scene_seconds, out.model_seconds,
              out.simulation_seconds, out.result.wall_seconds,
-             static_cast<double>(peak_resident_bytes()) / (1024.0 * 1024.0), thread_count());
+             static_cast<double>(peak_resident_bytes()) / (1024.0 * 1024.0),
+             current_thread_count());
   if (out.summary.find("integrator_details") != nullptr) {
     fmt::print("{}\n", out.result.message); // static: solver, factor size, phase times
   } else {

@@ -37,11 +37,6 @@ def mesh_setup_stage(ctx: Ctx) -> Stage:
                  [ctx.pd, scene, scene.with_suffix(".geo")], fn, default_seconds=150)
 
 
-def _plain(loadavg: object) -> str:
-    """"['0.70', '1.15', '1.69']" (how the stages record it) as "0.70 1.15 1.69"."""
-    return " ".join(str(loadavg).strip("[]").replace("'", "").split(", "))
-
-
 def mesh_setup_block(page: Page) -> str:
     rec = page.rec.get("mesh-setup")
     if rec is None:
@@ -62,8 +57,9 @@ def mesh_setup_block(page: Page) -> str:
             "part of its <code>.geo</code> file meshed by Gmsh with unstructured tetrahedra at the "
             "lattice spacing and filled with the lattice sites inside them (the default for a "
             "geometry file), one explicit step. Scene: reading the scene, meshing, locating the "
-            "sites; model: families, weights, ghost layers; simulation: the integrator's set-up. Load average before "
-            f'{esc(_plain(r.get("loadavg_before")))}, after {esc(_plain(r.get("loadavg_after")))}.'
-            "</p>" +
-            table(["particles", "bonds", "scene (s)", "model (s)", "simulation (s)", "set-up in all (s)",
-                   "model memory (MiB)", "peak memory (MiB)"], [row], 'id="mesh-setup-table"'))
+            "sites; model: families, weights, ghost layers; simulation: the integrator's set-up. "
+            f'Load average before {esc(r.get("loadavg_before"))}, after '
+            f'{esc(r.get("loadavg_after"))}.</p>' +
+            table(["particles", "bonds", "scene (s)", "model (s)", "simulation (s)",
+                   "set-up in all (s)", "model memory (MiB)", "peak memory (MiB)"], [row],
+                  'id="mesh-setup-table"'))

@@ -706,8 +706,9 @@ def mpi_stage(ctx: Ctx) -> Stage:
 
 
 def _loadavg() -> str:
+    """The 1, 5 and 15 minute load averages, as "0.70 1.15 1.69"."""
     try:
-        return Path("/proc/loadavg").read_text().split(" ")[0:3].__str__()
+        return " ".join(Path("/proc/loadavg").read_text().split(" ")[0:3])
     except OSError:
         return "?"
 

@@ -16,8 +16,7 @@
 namespace pd {
 
 /// Runnable threads besides this process's own, from /proc/loadavg's "running/total" field and
-/// the running threads of /proc/self/task (the fewest of three readings over a millisecond); -1
-/// where either cannot be read.
+/// the running threads of /proc/self/task (one reading); -1 where either cannot be read.
 int other_runnable_threads();
 
 /// The parsing behind other_runnable_threads: the runnable count of a /proc/loadavg line
