@@ -9,7 +9,8 @@ from .page import Page
 
 # The runs of the fracture case folders (verification/cases/<folder>/case.yaml), in the order the
 # section lists them: the quasi-static ones first, then the dynamic ones.
-CASES = ("fracture-stop", "fracture-stop-convergence", "fracture-stop-biaxial", "fracture-stop-3d",
+CASES = ("fracture-stop", "fracture-stop-convergence", "fracture-stop-biaxial",
+         "fracture-stop-corrections", "fracture-stop-3d",
          "fracture-stop-3d-slab", "crack-opening", "dcb", "dcb-fine",
          "kalthoff-winkler", "kalthoff-winkler-fine", "glass-branching", "glass-branching-fine")
 

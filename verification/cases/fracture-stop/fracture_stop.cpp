@@ -10,7 +10,6 @@
 #include "observed_order.hpp"
 #include "verification.hpp"
 
-#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -228,12 +227,12 @@ Json run_fracture_stop_corrections(const Context& ctx) {
   d["failure_stress"] = defaults;
   d["error"] = defaults / ref.griffith - 1;
   Json rows = Json::array();
-  double largest = 0;
+  double largest = 0; // signed: the switch that moved the failure stress most
   const auto add = [&](const char* key, std::string_view word, const Scene& s) {
     const double stress =
         failure_stress(s, fmt::format("fracture-stop-corrections-{}-{}", key, word));
     const double moved = stress / defaults - 1;
-    largest = std::max(largest, std::abs(moved));
+    largest = std::abs(moved) > std::abs(largest) ? moved : largest;
     fmt::print("   {} {:<14} failure stress {:.4g} MPa: {:+.2f} % of the defaults', {:+.2f} % of "
                "Griffith\n",
                key, word, stress / 1e6, 100 * moved, 100 * (stress / ref.griffith - 1));
@@ -260,11 +259,10 @@ Json run_fracture_stop_corrections(const Context& ctx) {
     }
   }
   out["switches"] = std::move(rows);
-  out["largest_move"] = largest;
-  finish_case(out,
-              "switching surface_correction or volume_correction from the defaults to any other "
-              "documented option moves the failure stress by at most 5 %",
-              largest <= 0.05, start);
+  out["pd"]["failure_stress_moved"] = largest;
+  out["error"]["failure_stress_moved"] = std::abs(largest);
+  out["signed_error"]["failure_stress_moved"] = largest;
+  finish_case(out, {{"failure_stress_moved", 0.05}}, true, start);
   return out;
 }
 
