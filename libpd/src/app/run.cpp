@@ -223,15 +223,9 @@ private:
     if (comm().size() == 1) {
       return;
     }
-    // Fixed-step ARKode only combines vectors, entry by entry: each rank's stages are the serial
-    // ones on its particles. Adaptive steps take norms of the whole state (not split yet). The
+    // ARKode's stages combine vectors entry by entry, and its norms are exact sums over the owned
+    // entries (time/arkode.cpp): each rank's steps are the serial ones on its particles. The
     // static solver splits its matrix by rows (time/distributed_solve.hpp).
-    if (scene_.solver.integrator == IntegratorKind::arkode && scene_.solver.arkode.adaptive) {
-      throw std::runtime_error(
-          "solver.integrator: adaptive arkode does not run on several MPI ranks yet; use "
-          "damped-euler, euler-cromer, verlet, adr, fixed-step arkode or static, or run with one "
-          "rank");
-    }
     const auto owner = partition_particles(model_, comm(), options_.partition);
     const PartitionQuality quality = partition_quality(model_, owner, comm().size());
     model_ = localise(model_, owner, comm().rank(), comm().size(), comm());

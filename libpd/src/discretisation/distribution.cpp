@@ -41,17 +41,32 @@ private:
 };
 
 /// The particles a rank computes forces for (`compute`: its own, and the dependants whose forces
-/// fold onto them) and those it holds (`held`: these, their bond neighbours, and the sources of
-/// every dependant among those).
+/// fold onto them), those whose bond rows it keeps (`rows`: these and, under virtual fibres, their
+/// bond neighbours, whose mean strains the forces read) and those it holds (`held`: the rows'
+/// particles, their bond neighbours, and the sources of every dependant among those).
 struct LocalSet {
   std::vector<std::uint8_t> compute;
+  std::vector<std::uint8_t> rows;
   std::vector<std::uint8_t> held;
 };
+
+/// Marks the bond neighbours of every particle marked in `from` in `to` (which may be `from`'s
+/// copy, so a pass reads the set it started with).
+void mark_neighbours(const Model& m, const std::vector<std::uint8_t>& from,
+                     std::vector<std::uint8_t>& to) {
+  for (std::size_t i = 0; i < from.size(); ++i) {
+    if (from[i] != 0) {
+      for (std::size_t k = m.family.offsets[i]; k < m.family.offsets[i + 1]; ++k) {
+        to[m.family.neighbour[k]] = 1;
+      }
+    }
+  }
+}
 
 LocalSet local_set(const Model& m, const Dependencies& deps, const std::vector<std::int32_t>& owner,
                    int rank) {
   const std::size_t n = m.size();
-  LocalSet s{std::vector<std::uint8_t>(n, 0), {}};
+  LocalSet s{std::vector<std::uint8_t>(n, 0), {}, {}};
   for (std::size_t i = 0; i < n; ++i) {
     if (owner[i] == rank) {
       s.compute[i] = 1;
@@ -60,14 +75,16 @@ LocalSet local_set(const Model& m, const Dependencies& deps, const std::vector<s
       }
     }
   }
-  s.held = s.compute;
-  for (std::size_t i = 0; i < n; ++i) {
-    if (s.compute[i] != 0) {
-      for (std::size_t k = m.family.offsets[i]; k < m.family.offsets[i + 1]; ++k) {
-        s.held[m.family.neighbour[k]] = 1;
-      }
-    }
+  s.rows = s.compute;
+  if (!m.fibre_arms.empty()) {
+    // Eq. 70: an arm's tension reads the mean strain (eq. 73) of both its ends. The rank computes
+    // its neighbours' means from their own rows rather than receiving them between the two passes:
+    // a halo twice as deep and the rows' work done twice at the cut, but one exchange per
+    // evaluation as for bond-based models, and each mean summed in the serial order.
+    mark_neighbours(m, s.compute, s.rows);
   }
+  s.held = s.rows;
+  mark_neighbours(m, s.rows, s.held);
   for (std::size_t i = 0; i < n; ++i) { // sources are never dependants: one pass closes the set
     if (s.held[i] != 0) {
       for (const std::uint32_t src : deps.sources[i]) {
@@ -112,7 +129,7 @@ void copy_rows(const Model& g, Model& l, const LocalSet& s, const std::vector<st
   std::vector<std::uint32_t> bonds; // global directed-bond indices kept, in local row order
   l.family.offsets.assign(1, 0);
   for (const std::uint32_t gi : kept) {
-    if (s.compute[gi] != 0) {
+    if (s.rows[gi] != 0) {
       for (std::size_t k = g.family.offsets[gi]; k < g.family.offsets[gi + 1]; ++k) {
         bonds.push_back(static_cast<std::uint32_t>(k));
         l.family.neighbour.push_back(static_cast<std::uint32_t>(local_of[g.family.neighbour[k]]));
@@ -130,6 +147,14 @@ void copy_rows(const Model& g, Model& l, const LocalSet& s, const std::vector<st
   l.state.broken = subset(g.state.broken, bonds);
   l.state.plastic_stretch = subset(g.state.plastic_stretch, bonds);
   l.state.damage = subset(g.state.damage, kept);
+  if (!g.fibre_arms.empty()) {
+    FibreArms& a = l.fibre_arms;
+    a = g.fibre_arms; // the scalars and the balance's record, then the arrays restricted
+    a.own = subset(g.fibre_arms.own, bonds);
+    a.other = subset(g.fibre_arms.other, bonds);
+    a.shear = subset(g.fibre_arms.shear, kept);
+    a.volumetric = subset(g.fibre_arms.volumetric, kept);
+  }
 }
 
 void copy_ties(const Model& g, Model& l, const std::vector<std::int64_t>& local_of) {
@@ -169,10 +194,6 @@ Model localise(const Model& global, const std::vector<std::int32_t>& owner, int 
   if (owner.size() != global.size()) {
     throw std::logic_error("localise: one owner per particle expected");
   }
-  if (!global.fibre_arms.empty() && ranks > 1) {
-    throw std::runtime_error("the virtual-fibre model does not run on several MPI ranks yet: run "
-                             "it with one rank");
-  }
   const Dependencies deps(global);
   const LocalSet mine = local_set(global, deps, owner, rank);
   std::vector<std::uint32_t> kept;
@@ -207,6 +228,12 @@ Model localise(const Model& global, const std::vector<std::int32_t>& owner, int 
   o.owned.resize(kept.size());
   for (std::size_t i = 0; i < kept.size(); ++i) {
     o.owned[i] = owner[kept[i]] == rank ? 1 : 0;
+  }
+  if (mine.rows != mine.compute) {
+    o.row_for_mean_only.resize(kept.size());
+    for (std::size_t i = 0; i < kept.size(); ++i) {
+      o.row_for_mean_only[i] = mine.rows[kept[i]] != 0 && mine.compute[kept[i]] == 0 ? 1 : 0;
+    }
   }
   o.global_particles = global.size();
   o.global_body_particles = global.body_particle_count();

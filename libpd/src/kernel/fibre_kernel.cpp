@@ -23,6 +23,7 @@
 // thread count, so forces are bitwise identical for any number of threads. Elastic arms run on the
 // vectorised passes of simd_fibre_loop.cpp by default (KernelPath::simd); the scalar loops below
 // stay their reference and serve plasticity and damage.
+#include "libpd/core/exact_sum.hpp"
 #include "libpd/kernel/force_kernel.hpp"
 #include "libpd/kernel/simd_bond_loop.hpp"
 #include "libpd/kernel/simd_fibre_loop.hpp"
@@ -89,15 +90,23 @@ public:
       };
       kernel::for_row_phases(d.offsets, model_.size(), rows(pack_rows_), rows(mean_rows_),
                              rows(force_rows_));
-      return;
-    }
-    const auto& start = model_.state.plastic_stretch_at_increment_start;
-    plastic_start_ = start.size() == model_.family.directed_bond_count() ? start.data() : nullptr;
-    mean_strains(y);
-    const auto n = static_cast<std::ptrdiff_t>(model_.size());
+    } else {
+      const auto& start = model_.state.plastic_stretch_at_increment_start;
+      plastic_start_ = start.size() == model_.family.directed_bond_count() ? start.data() : nullptr;
+      mean_strains(y);
+      const auto n = static_cast<std::ptrdiff_t>(model_.size());
 #pragma omp parallel for schedule(static) if (model_.size() >= parallel_min_particles)
-    for (std::ptrdiff_t ii = 0; ii < n; ++ii) {
-      row(y, b, static_cast<std::size_t>(ii));
+      for (std::ptrdiff_t ii = 0; ii < n; ++ii) {
+        row(y, b, static_cast<std::size_t>(ii));
+      }
+    }
+    // A split run's rows kept for their means (ownership.hpp): pass 2 ran on them too, because it
+    // is where their arms yield and fail, but their force is the owner's to compute.
+    const auto& mean_only = model_.ownership.row_for_mean_only;
+    for (std::size_t i = 0; i < mean_only.size(); ++i) {
+      if (mean_only[i] != 0) {
+        b[3 * i] = b[3 * i + 1] = b[3 * i + 2] = 0.0;
+      }
     }
   }
 
@@ -105,8 +114,12 @@ public:
     // E = Σ_i V_i [½ G(N+2) Σ_j A_k |ξ| (ε − ε^p)² + ½ (NK − G(N+2)) N ε̄_i²], in particle order.
     const FibreArms& a = model_.fibre_arms;
     const BondFamily& f = model_.family;
-    double total = 0;
+    const Ownership& own = model_.ownership;
+    ExactSum total; // over the owned particles: the same energy on any number of ranks
     for (std::size_t i = 0; i < model_.size(); ++i) {
+      if (!own.owns(i)) {
+        continue;
+      }
       double shear_sum = 0, mean = 0, weight = 0;
       for (std::size_t k = f.offsets[i]; k < f.offsets[i + 1]; ++k) {
         if (Damage && model_.state.broken[k]) {
@@ -121,10 +134,10 @@ public:
       if (Damage) {
         mean = weight > 0 ? mean / weight : 0.0;
       }
-      total += 0.5 * model_.particles.volume[i] *
-               (a.shear[i] * shear_sum + a.volumetric[i] * a.dim * mean * mean);
+      total.add(0.5 * model_.particles.volume[i] *
+                (a.shear[i] * shear_sum + a.volumetric[i] * a.dim * mean * mean));
     }
-    return total;
+    return own.communicator().sum(total);
   }
 
   std::string description() const override {

@@ -20,6 +20,11 @@
 // (y = X + u, v), O(N) against the O(N·bonds) force evaluations of each step; if the caller
 // changes the State's time (a new run), the integrator restarts from it with ERKStepReset.
 //
+// Split runs (MPI). Each rank's vector holds its own particles and its halo copies; stages combine
+// vectors entry by entry, and every reduction the adaptive steps take is an exact sum (or extremum)
+// over the owned entries, reduced over the ranks (OwnedNorms below), so a split run accepts and
+// rejects the steps one process does, bit for bit.
+//
 // History. ForceEvaluator::compute updates bond history (damage, plastic stretch) in place, and
 // ERK stages are trial evaluations (and adaptive steps may be rejected), so arkode refuses models
 // with damage or plasticity (make_integrator throws; the scene parser reports it first).
@@ -47,13 +52,17 @@
 // steps (step size, error-controller history and stability-limited step live inside ERKStep and
 // cannot be set back).
 #include "libpd/core/binary_state.hpp"
+#include "libpd/core/exact_sum.hpp"
 #include "libpd/kernel/force_kernel.hpp"
 #include "libpd/time/integrator.hpp"
 #include "libpd/time/stability.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <fmt/format.h>
 #include <limits>
+#include <map>
+#include <mutex>
 #include <stdexcept>
 
 #ifdef LIBPD_HAVE_SUNDIALS
@@ -162,6 +171,129 @@ ButcherTableau butcher_tableau(ArkodeTable table) {
 
 namespace {
 
+/// Norms over the whole body for a split run (and the same code in one process): the entries of
+/// the owned particles only (a halo copy is another rank's entry, and its values between two
+/// exchanges are not the owner's), summed exactly (core/exact_sum.hpp) and reduced over the ranks,
+/// so every rank takes the same step-size decisions and the steps are those of one process. The
+/// vector [u; v] holds 6 values per local particle. SUNDIALS' serial vector keeps no user
+/// pointer; the integrator's SUNContext, which every clone carries, is the key.
+struct OwnedNorms {
+  const Ownership* ownership = nullptr;
+  std::size_t particles = 0; ///< local particles (the vector has 6 per particle)
+  double global_entries = 0; ///< 6 × the whole model's particles
+
+  bool owns_entry(sunindextype e) const {
+    return ownership->owns((static_cast<std::size_t>(e) % (3 * particles)) / 3);
+  }
+};
+
+std::mutex owned_norms_mutex;
+std::map<SUNContext, OwnedNorms>& owned_norms_by_context() {
+  static std::map<SUNContext, OwnedNorms> by_context;
+  return by_context;
+}
+
+const OwnedNorms& owned_norms(N_Vector v) {
+  const std::lock_guard lock(owned_norms_mutex);
+  return owned_norms_by_context().at(v->sunctx);
+}
+
+template <class Term>
+double owned_exact_sum(N_Vector x, Term term) {
+  const OwnedNorms& on = owned_norms(x);
+  const sunindextype n = N_VGetLength_Serial(x);
+  ExactSum sum;
+  for (sunindextype e = 0; e < n; ++e) {
+    if (on.owns_entry(e)) {
+      sum.add(term(e));
+    }
+  }
+  return on.ownership->communicator().sum(sum);
+}
+
+template <class Term>
+double owned_extremum(N_Vector x, bool largest, Term term) {
+  const OwnedNorms& on = owned_norms(x);
+  const sunindextype n = N_VGetLength_Serial(x);
+  double out =
+      largest ? -std::numeric_limits<double>::infinity() : std::numeric_limits<double>::infinity();
+  for (sunindextype e = 0; e < n; ++e) {
+    if (on.owns_entry(e)) {
+      out = largest ? std::max(out, term(e)) : std::min(out, term(e));
+    }
+  }
+  const Communicator& comm = on.ownership->communicator();
+  return largest ? comm.max(out) : comm.min(out);
+}
+
+sunrealtype owned_wrms_norm(N_Vector x, N_Vector w) {
+  const double* xd = N_VGetArrayPointer(x);
+  const double* wd = N_VGetArrayPointer(w);
+  const double sum = owned_exact_sum(x, [&](sunindextype e) {
+    const double p = xd[e] * wd[e];
+    return p * p;
+  });
+  return std::sqrt(sum / owned_norms(x).global_entries);
+}
+
+sunrealtype owned_wrms_norm_mask(N_Vector x, N_Vector w, N_Vector id) {
+  const double* xd = N_VGetArrayPointer(x);
+  const double* wd = N_VGetArrayPointer(w);
+  const double* mask = N_VGetArrayPointer(id);
+  const double sum = owned_exact_sum(x, [&](sunindextype e) {
+    const double p = mask[e] > 0 ? xd[e] * wd[e] : 0.0;
+    return p * p;
+  });
+  return std::sqrt(sum / owned_norms(x).global_entries);
+}
+
+sunrealtype owned_wl2_norm(N_Vector x, N_Vector w) {
+  const double* xd = N_VGetArrayPointer(x);
+  const double* wd = N_VGetArrayPointer(w);
+  return std::sqrt(owned_exact_sum(x, [&](sunindextype e) {
+    const double p = xd[e] * wd[e];
+    return p * p;
+  }));
+}
+
+sunrealtype owned_dot(N_Vector x, N_Vector y) {
+  const double* xd = N_VGetArrayPointer(x);
+  const double* yd = N_VGetArrayPointer(y);
+  return owned_exact_sum(x, [&](sunindextype e) { return xd[e] * yd[e]; });
+}
+
+sunrealtype owned_l1_norm(N_Vector x) {
+  const double* xd = N_VGetArrayPointer(x);
+  return owned_exact_sum(x, [&](sunindextype e) { return std::abs(xd[e]); });
+}
+
+sunrealtype owned_max_norm(N_Vector x) {
+  const double* xd = N_VGetArrayPointer(x);
+  return std::max(0.0, owned_extremum(x, true, [&](sunindextype e) { return std::abs(xd[e]); }));
+}
+
+sunrealtype owned_min(N_Vector x) {
+  const double* xd = N_VGetArrayPointer(x);
+  return owned_extremum(x, false, [&](sunindextype e) { return xd[e]; });
+}
+
+/// Every reduction ERKStep may take goes through the owned entries; the fused ones fall back to
+/// these (SUNDIALS loops over the single operations when a fused one is absent).
+void use_owned_norms(N_Vector v) {
+  N_Vector_Ops ops = v->ops;
+  ops->nvwrmsnorm = owned_wrms_norm;
+  ops->nvwrmsnormmask = owned_wrms_norm_mask;
+  ops->nvwl2norm = owned_wl2_norm;
+  ops->nvdotprod = owned_dot;
+  ops->nvl1norm = owned_l1_norm;
+  ops->nvmaxnorm = owned_max_norm;
+  ops->nvmin = owned_min;
+  ops->nvminquotient = nullptr; // used by implicit constraint handling only
+  ops->nvdotprodmulti = nullptr;
+  ops->nvwrmsnormvectorarray = nullptr;
+  ops->nvwrmsnormmaskvectorarray = nullptr;
+}
+
 class ArkodeIntegrator final : public Integrator {
 public:
   ArkodeIntegrator(Model& m, ForceEvaluator& f, const IntegratorSettings& s)
@@ -182,6 +314,14 @@ public:
     scratch_position_.assign(ndof_, 0.0);
     scratch_force_.assign(ndof_, 0.0);
     y_ = N_VMake_Serial(static_cast<sunindextype>(2 * ndof_), buffer_.data(), context_);
+    {
+      const std::lock_guard lock(owned_norms_mutex);
+      const Ownership& own = m.ownership;
+      owned_norms_by_context()[context_] = {
+          &own, m.size(),
+          6.0 * static_cast<double>(own.partial() ? own.global_particles : m.size())};
+    }
+    use_owned_norms(y_); // ERKStep's clones copy the operations
     constraint_rate_.assign(ndof_, 0.0);
     constrained_ = held_dofs(m);
   }
@@ -197,6 +337,10 @@ public:
       N_VDestroy(y_);
     }
     if (context_ != nullptr) {
+      {
+        const std::lock_guard lock(owned_norms_mutex);
+        owned_norms_by_context().erase(context_);
+      }
       SUNContext_Free(&context_);
     }
   }

@@ -3,9 +3,11 @@
 //
 // A rank's model holds its owned particles and, as halo copies, every particle its owned
 // particles' forces depend on: their bond neighbours, and the sources of the ghost and clamp
-// particles among those. Local indices keep the global order, so every bond family row, every
-// fold of a dependant's force onto its sources and every constraint list is the global one
-// restricted — each owned particle's force is summed in exactly the order of the serial run.
+// particles among those. Under virtual fibres a force also reads the neighbours' mean strains, so
+// the neighbours' rows are kept too and the halo reaches two horizons. Local indices keep the
+// global order, so every bond family row, every fold of a dependant's force onto its sources and
+// every constraint list is the global one restricted — each owned particle's force is summed in
+// exactly the order of the serial run.
 // Only owned particles enter sums over the body (exact sums, core/exact_sum.hpp), so each
 // particle counts once over all ranks.
 #pragma once
@@ -22,6 +24,10 @@ struct Ownership {
   const Communicator* comm = nullptr;      ///< nullptr: the serial communicator
   std::vector<std::uint8_t> owned;         ///< per local particle; empty: every particle
   std::vector<std::uint32_t> global_index; ///< per local particle; empty: the identity
+  /// Virtual fibres: per local particle, 1 where the rank keeps the bond row only for the mean
+  /// strain its neighbours' forces read (discretisation/distribution.cpp); its force is another
+  /// rank's, and the fibre kernel leaves it zero. Empty: no such particle.
+  std::vector<std::uint8_t> row_for_mean_only;
   /// Halo copies of particles other ranks own; refreshed by apply_constraints (time/) before the
   /// dependants are set, so a step sees the owners' positions.
   HaloPlan halo;
