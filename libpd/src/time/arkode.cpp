@@ -199,8 +199,7 @@ const OwnedNorms& owned_norms(N_Vector v) {
 }
 
 template <class Term>
-double owned_exact_sum(N_Vector x, Term term) {
-  const OwnedNorms& on = owned_norms(x);
+double owned_exact_sum(const OwnedNorms& on, N_Vector x, Term term) {
   const sunindextype n = N_VGetLength_Serial(x);
   ExactSum sum;
   for (sunindextype e = 0; e < n; ++e) {
@@ -226,45 +225,41 @@ double owned_extremum(N_Vector x, bool largest, Term term) {
   return largest ? comm.max(out) : comm.min(out);
 }
 
-sunrealtype owned_wrms_norm(N_Vector x, N_Vector w) {
+/// Σ (x w)² over the owned entries, where `mask` (if given) is positive; the three weighted norms
+/// are this sum over the whole model's entries (RMS) or alone (L2).
+double owned_weighted_squares(const OwnedNorms& on, N_Vector x, N_Vector w,
+                              const double* mask = nullptr) {
   const double* xd = N_VGetArrayPointer(x);
   const double* wd = N_VGetArrayPointer(w);
-  const double sum = owned_exact_sum(x, [&](sunindextype e) {
-    const double p = xd[e] * wd[e];
+  return owned_exact_sum(on, x, [&](sunindextype e) {
+    const double p = mask == nullptr || mask[e] > 0 ? xd[e] * wd[e] : 0.0;
     return p * p;
   });
-  return std::sqrt(sum / owned_norms(x).global_entries);
+}
+
+sunrealtype owned_wrms_norm(N_Vector x, N_Vector w) {
+  const OwnedNorms& on = owned_norms(x);
+  return std::sqrt(owned_weighted_squares(on, x, w) / on.global_entries);
 }
 
 sunrealtype owned_wrms_norm_mask(N_Vector x, N_Vector w, N_Vector id) {
-  const double* xd = N_VGetArrayPointer(x);
-  const double* wd = N_VGetArrayPointer(w);
-  const double* mask = N_VGetArrayPointer(id);
-  const double sum = owned_exact_sum(x, [&](sunindextype e) {
-    const double p = mask[e] > 0 ? xd[e] * wd[e] : 0.0;
-    return p * p;
-  });
-  return std::sqrt(sum / owned_norms(x).global_entries);
+  const OwnedNorms& on = owned_norms(x);
+  return std::sqrt(owned_weighted_squares(on, x, w, N_VGetArrayPointer(id)) / on.global_entries);
 }
 
 sunrealtype owned_wl2_norm(N_Vector x, N_Vector w) {
-  const double* xd = N_VGetArrayPointer(x);
-  const double* wd = N_VGetArrayPointer(w);
-  return std::sqrt(owned_exact_sum(x, [&](sunindextype e) {
-    const double p = xd[e] * wd[e];
-    return p * p;
-  }));
+  return std::sqrt(owned_weighted_squares(owned_norms(x), x, w));
 }
 
 sunrealtype owned_dot(N_Vector x, N_Vector y) {
   const double* xd = N_VGetArrayPointer(x);
   const double* yd = N_VGetArrayPointer(y);
-  return owned_exact_sum(x, [&](sunindextype e) { return xd[e] * yd[e]; });
+  return owned_exact_sum(owned_norms(x), x, [&](sunindextype e) { return xd[e] * yd[e]; });
 }
 
 sunrealtype owned_l1_norm(N_Vector x) {
   const double* xd = N_VGetArrayPointer(x);
-  return owned_exact_sum(x, [&](sunindextype e) { return std::abs(xd[e]); });
+  return owned_exact_sum(owned_norms(x), x, [&](sunindextype e) { return std::abs(xd[e]); });
 }
 
 sunrealtype owned_max_norm(N_Vector x) {
