@@ -646,7 +646,13 @@ std::vector<double> bond_correction_factors(const CorrectionSpec& spec,
                                             std::size_t body_count) {
   const std::size_t n = particles.size();
   const int dim = spec.dimension.dim;
-  std::vector<double> factor = volume_correction_factors(spec, particles, family);
+  // `gradient` on an unstructured set: each particle's own weights, then the `tensor` axis
+  // factors, which restore the uniaxial energies the mean of a pair's two ends' weights moves.
+  const bool per_particle =
+      spec.unstructured && spec.volume_correction == VolumeCorrection::gradient;
+  std::vector<double> factor =
+      per_particle ? particle_gradient_weights(spec, particles, family, body_count).factor
+                   : volume_correction_factors(spec, particles, family);
   const auto tensor_along = [dim](const Vec3& xi, double inv, const std::array<double, 3>& mean) {
     double phi = 0; // n·G·n with the mean diagonal tensor
     for (std::size_t d = 0; d < static_cast<std::size_t>(dim); ++d) {
@@ -654,7 +660,7 @@ std::vector<double> bond_correction_factors(const CorrectionSpec& spec,
     }
     return phi;
   };
-  if (spec.volume_correction == VolumeCorrection::tensor) {
+  if (spec.volume_correction == VolumeCorrection::tensor || per_particle) {
     // A ghost's own neighbourhood is cut off at the ghost layer's edge: its factors would
     // correct that, so its bonds take the body particle's.
     const auto g = tensor_surface_factors(spec, particles, family, factor);

@@ -1,4 +1,4 @@
-// What a bond-based model with a mesh body runs with instead of the lattice defaults (model.hpp).
+// What `pd info` and the run summary say of a bond-based model with a mesh body (model.hpp).
 #include "libpd/discretisation/model.hpp"
 
 #include <string>
@@ -11,8 +11,10 @@ std::string mesh_corrections_note(const ModelSpec& spec) {
   }
   return std::string("surface ") + to_string(spec.surface_correction) + ", volume " +
          to_string(spec.volume_correction) +
-         ": a mesh body is an unstructured set, so its bonds cannot take the lattice's gradient "
-         "weights (docs/scenes.md, meshes)";
+         (spec.volume_correction == VolumeCorrection::gradient
+              ? ": a mesh body is an unstructured set, so each particle's gradient weights are "
+                "solved over its own bonds (docs/scenes.md, meshes)"
+              : ": a mesh body is an unstructured set (docs/scenes.md, meshes)");
 }
 
 } // namespace pd

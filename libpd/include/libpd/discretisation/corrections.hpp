@@ -71,6 +71,9 @@ struct CorrectionSpec {
   HorizonRule horizon_rule;
   SurfaceCorrection surface_correction;
   VolumeCorrection volume_correction;
+  /// The particles are not a lattice (a mesh body's elements): `gradient` weights are then solved
+  /// per particle (particle_gradient_weights) instead of per lattice orbit.
+  bool unstructured = false;
 
   /// Whether any correction applies, i.e. whether bonds carry factors other than 1.
   bool corrects() const {
@@ -210,6 +213,21 @@ struct GradientWeights {
   double reach() const;
 };
 GradientWeights gradient_matched_weights(const CorrectionSpec& spec);
+/// `volume_correction: gradient` on an unstructured set (a mesh body's particles): the equations of
+/// the lattice's `gradient` weights, solved per particle over its own bonds (ghosts included)
+/// instead of per lattice orbit, with the zero 3rd moment a lattice has by symmetry and the
+/// gradient fields along every axis (gradient_weights.cpp). A pair takes the mean of its two
+/// ends' weights.
+struct ParticleGradientWeights {
+  std::vector<double> factor;   ///< per directed bond (CSR order), the same for both directions
+  std::size_t matched = 0;      ///< body particles whose moments and gradient fields were met
+  std::size_t moments_only = 0; ///< ... whose 4th and 3rd moments only were met
+  std::size_t unmatched = 0;    ///< ... whose moments could not be met: their weights stay 1
+  double residual = 0;          ///< largest relative residual of the equations that were met
+};
+ParticleGradientWeights particle_gradient_weights(const CorrectionSpec& spec,
+                                                  const ParticleSet& particles,
+                                                  const BondFamily& family, std::size_t body_count);
 
 /// Fitted bond weights (`volume_correction: fitted`), for particle sets that are not a lattice
 /// (jittered, varying volumes): one weight w_p ≥ 0 per pair, used at both ends so that momentum
@@ -231,7 +249,8 @@ FittedWeights fitted_bond_weights(const CorrectionSpec& spec, const ParticleSet&
                                   const BondFamily& family);
 
 /// The longest bond that keeps a stiffness, in spacings: the outermost orbit with a non-zero
-/// weight under `gradient` weights (2 at δ = 2√3 λ), the horizon factor otherwise. Ghost sites
+/// weight under `gradient` weights (2 at δ = 2√3 λ; one spacing more on an unstructured set,
+/// whose particles solve their own), the horizon factor otherwise. Ghost sites
 /// beyond it would carry only bonds of zero weight, so none are made (model.cpp, resources.cpp).
 double stiff_bond_reach(const CorrectionSpec& spec);
 

@@ -149,27 +149,29 @@ struct ModelSpec {
   CorrectionSpec corrections() const {
     const bool fibres = effects.bond_model == BondModel::virtual_fibres &&
                         volume_correction == VolumeCorrection::gradient;
-    return {dimension, lattice, horizon_rule, surface_correction,
-            fibres ? VolumeCorrection::moment : volume_correction};
+    return {dimension,
+            lattice,
+            horizon_rule,
+            surface_correction,
+            fibres ? VolumeCorrection::moment : volume_correction,
+            effects.bond_model != BondModel::virtual_fibres && has_mesh_body()};
   }
 };
 
-/// The corrections of a bond-based model with a mesh body. Ghost layers, as on the lattice: the
-/// lattice sites outside the part (outside its elements, ghost_layers.hpp) continue every body
-/// particle's horizon, quadratic-exact, so a thin part bends as the continuum does. `gradient`
-/// (also `moment`, `exact`) weighs a bond by the lattice offset it rounds to, which an
-/// unstructured set does not have; `tensor` gives each particle's own neighbourhood, ghosts
-/// included, the continuum's energy under uniaxial stress along each axis (corrections.hpp),
-/// which corrects the irregular quadrature of the mesh (the bulk of a mesh of triangles is a few
-/// per cent soft without it).
+/// The corrections of a bond-based model with a mesh body: the lattice's defaults. Ghost layers,
+/// as on the lattice: the lattice sites outside the part (outside its elements, ghost_layers.hpp)
+/// continue every body particle's horizon, quadratic-exact. `gradient` weights cannot be looked up
+/// by lattice offset on an unstructured set, so each particle's are solved over its own bonds
+/// (particle_gradient_weights, corrections.hpp), then `tensor`'s axis factors restore the
+/// uniaxial energies that sharing a pair's weight between its two ends moves; so a thin part
+/// bends as the continuum does (docs/scenes.md, meshes).
 inline constexpr SurfaceCorrection mesh_surface_correction = SurfaceCorrection::ghost;
-inline constexpr VolumeCorrection mesh_volume_correction = VolumeCorrection::tensor;
+inline constexpr VolumeCorrection mesh_volume_correction = VolumeCorrection::gradient;
 
 /// Whether a volume correction needs the lattice (a mesh body cannot take it): what it says why,
 /// or nullptr. Every surface correction works on any set.
 inline const char* lattice_only(VolumeCorrection v) {
   switch (v) {
-  case VolumeCorrection::gradient:
   case VolumeCorrection::moment:
     return "its weights are per lattice offset, looked up by rounding a bond to the lattice";
   case VolumeCorrection::exact:

@@ -48,7 +48,8 @@ constexpr Key model_keys[] = {
      .type = Type::choice,
      .doc = "bond quadrature weights: partial volume of cut cells (linear, exact), "
             "moment-matched lattice weights (moment), or weights that also match a cell's "
-            "bending energy (gradient: stiffness on the bonds up to 2 spacings), or per-pair "
+            "bending energy (gradient: stiffness on the bonds up to 2 spacings; solved per "
+            "particle on a mesh body), or per-pair "
             "weights fitted to each particle's own neighbourhood (fitted: for sets that are not "
             "a lattice)",
      .choices = enum_words<VolumeCorrection>,
