@@ -421,11 +421,15 @@ double stiff_bond_reach(const CorrectionSpec& spec) {
   if (spec.volume_correction != VolumeCorrection::gradient) {
     return spec.lattice.horizon_factor;
   }
+  return stiff_bond_reach(spec, gradient_matched_weights(spec));
+}
+
+double stiff_bond_reach(const CorrectionSpec& spec, const GradientWeights& weights) {
   // An unstructured set's particles solve their own weights (particle_gradient_weights) over
   // bonds one spacing longer than the lattice's: over the whole horizon cantilever-tet.yaml took
   // 2.3 times as long to set up, for a tip deflection 0.014 % different.
   const double extra = spec.unstructured ? 1.0 : 0.0;
-  return std::min(gradient_matched_weights(spec).reach() + extra, spec.lattice.horizon_factor);
+  return std::min(weights.reach() + extra, spec.lattice.horizon_factor);
 }
 
 namespace {
@@ -446,8 +450,7 @@ GhostSiteReach ghost_site_reach(const CorrectionSpec& spec) {
 }
 
 GhostSiteReach ghost_site_reach(const CorrectionSpec& spec, const GradientWeights& weights) {
-  return shortened_to(spec, std::min(weights.reach() + (spec.unstructured ? 1.0 : 0.0),
-                                     spec.lattice.horizon_factor));
+  return shortened_to(spec, stiff_bond_reach(spec, weights));
 }
 
 double fracture_energy_weight_ratio(const CorrectionSpec& spec) {
@@ -540,10 +543,10 @@ double moment_term(const MomentRow& row, const Vec3& n, double len) {
 }
 
 /// The rows every particle's equations share: the continuum's 4th moments and a zero 3rd moment
-/// and, with `gradient`, the 6th moments of the lattice's `gradient` weights (which give a bond
+/// and, given the `lattice`'s `gradient` weights, their 6th moments (which give a bond
 /// family its energy under every strain gradient) and a zero 5th moment (no energy coupling a
 /// uniform strain to a gradient), as on the lattice by symmetry.
-std::vector<MomentRow> particle_rows(const CorrectionSpec& spec, bool with_gradient) {
+std::vector<MomentRow> particle_rows(const CorrectionSpec& spec, const GradientWeights* lattice) {
   const int dim = spec.dimension.dim;
   const double delta = spec.lattice.horizon();
   const double u = uniaxial_energy_moment(spec.dimension, delta);
@@ -556,12 +559,11 @@ std::vector<MomentRow> particle_rows(const CorrectionSpec& spec, bool with_gradi
                                   (c[0] == c[3] && c[1] == c[2]));
     rows.push_back({c, 4, 1, t > 0 ? 1.0 / t : 1.0 / u, t > 0 ? 1.0 : 0.0});
   }
-  if (!with_gradient || dim == 1) {
+  if (lattice == nullptr || dim == 1) {
     return rows;
   }
   const double lambda = spec.lattice.spacing;
   const double v = cell_volume(spec.dimension, lambda);
-  const GradientWeights lattice = gradient_matched_weights(spec);
   std::vector<MomentRow> sixth;
   for (const auto& c : symmetric_components(dim, 6)) {
     sixth.push_back({c, 6, 3, 1.0, 0.0});
@@ -570,7 +572,7 @@ std::vector<MomentRow> particle_rows(const CorrectionSpec& spec, bool with_gradi
                          [&](const std::array<long long, 3>& o) {
                            const Vec3 xi = offset_vector(o, lambda);
                            const double r = norm(xi);
-                           const double w = lattice.weight(xi, lambda);
+                           const double w = lattice->weight(xi, lambda);
                            const Vec3 n{xi[0] / r, xi[1] / r, xi[2] / r};
                            for (MomentRow& row : sixth) {
                              row.target += w * v * moment_term(row, n, r);
@@ -656,10 +658,11 @@ ParticleGradientWeights particle_gradient_weights(const CorrectionSpec& spec,
   std::vector<int> outcome(body_count, 0); // 2 everything, 1 moments only, 0 neither
   std::vector<double> residual(body_count, 0.0);
   constexpr double tolerance = 1e-10;
-  const std::vector<MomentRow> gradient_rows = particle_rows(spec, true);
-  const std::vector<MomentRow> moment_rows = particle_rows(spec, false);
+  const GradientWeights lattice = gradient_matched_weights(spec);
+  const std::vector<MomentRow> gradient_rows = particle_rows(spec, &lattice);
+  const std::vector<MomentRow> moment_rows = particle_rows(spec, nullptr);
   const double delta = spec.lattice.horizon();
-  const double gradient_reach = stiff_bond_reach(spec) * spec.lattice.spacing;
+  const double gradient_reach = stiff_bond_reach(spec, lattice) * spec.lattice.spacing;
 #pragma omp parallel for schedule(dynamic, 16)
   for (std::size_t i = 0; i < body_count; ++i) {
     for (const bool with_gradient : {true, false}) {
@@ -673,7 +676,8 @@ ParticleGradientWeights particle_gradient_weights(const CorrectionSpec& spec,
       if (!w && (s.a * nnls(s.a, b) - b).lpNorm<Eigen::Infinity>() <= 1e-9) {
         w = closest_to_uniform_by_dual(s, b, 400, tolerance);
       }
-      if (!w || !((s.a * *w - b).lpNorm<Eigen::Infinity>() <= tolerance)) {
+      const double misfit = w ? (s.a * *w - b).lpNorm<Eigen::Infinity>() : 0.0;
+      if (!w || !(misfit <= tolerance)) {
         continue;
       }
       // Weights at round-off of the largest are zeros (as for the lattice's): their bonds leave
@@ -687,7 +691,7 @@ ParticleGradientWeights particle_gradient_weights(const CorrectionSpec& spec,
         own[bond[c]] = value < 1e-12 * largest ? 0.0 : value;
       }
       outcome[i] = with_gradient ? 2 : 1;
-      residual[i] = (s.a * *w - b).lpNorm<Eigen::Infinity>();
+      residual[i] = misfit;
       break;
     }
   }

@@ -10,8 +10,9 @@
 // resolution and finer: the lateral contraction within 2 % of the reference (issue 17), and the
 // axial strain, the same closed form's other half, within the same 2 %, and the ν the strains
 // imply (r = −ε_yy/ε_xx in 3D, r/(1 + r) in plane strain) within 2 % of ν. A section coarser than
-// the default is held to what a discretisation of the closed form owes: its lateral error is larger
-// than at every finer section of the same ν and dimension (the error falls with refinement).
+// the default is held to what a discretisation of the closed form owes: its lateral, axial and
+// effective-ν errors are each larger than at every finer section of the same ν and dimension (the
+// error falls with refinement).
 //
 // The scene takes the library's defaults and sets only the knob the case studies (bond_model):
 // ghost layers outside the free faces complete every body particle's horizon (ghosts own no

@@ -253,6 +253,8 @@ FittedWeights fitted_bond_weights(const CorrectionSpec& spec, const ParticleSet&
 /// whose particles solve their own), the horizon factor otherwise. Ghost sites
 /// beyond it would carry only bonds of zero weight, so none are made (model.cpp, resources.cpp).
 double stiff_bond_reach(const CorrectionSpec& spec);
+/// The same with the `gradient` weights already solved.
+double stiff_bond_reach(const CorrectionSpec& spec, const GradientWeights& weights);
 
 /// Where ghost sites are looked for: the lattice with its horizon shortened to stiff_bond_reach,
 /// and the rule that goes with it (inclusive where shortened: the reach is an offset's length).
