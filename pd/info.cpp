@@ -2,6 +2,7 @@
 // Sizes, memory and stable time step of a scene, beside the estimate the scene parser's memory
 // guard used, so that its accuracy can be checked on any scene.
 #include "commands.hpp"
+#include "libpd/app/run_summary.hpp"
 #include "libpd/core/json.hpp"
 #include "libpd/io/resources.hpp"
 #include "libpd/kernel/stable_time_step.hpp"
@@ -43,6 +44,14 @@ void print_table(const std::string& scene_path, const Model& model, const Resour
   if (const std::string note = mesh_corrections_note(model.spec); !note.empty()) {
     fmt::print("corrections        {}\n", note);
   }
+  if (const ParticleGradientWeights& w = model.particle_weights; w.seconds > 0) {
+    // What a mesh body's per-particle `gradient` solve met: a particle that keeps the moments
+    // only stores more energy under a strain gradient (bending) than one that matched.
+    fmt::print("gradient weights   {} of {} particles matched, {} moments only, {} neither "
+               "({:.3g} s)\n",
+               w.matched, w.matched + w.moments_only + w.unmatched, w.moments_only, w.unmatched,
+               w.seconds);
+  }
 }
 
 int info(const InfoArgs& a) {
@@ -75,6 +84,9 @@ int info(const InfoArgs& a) {
   j["effects"] = Json::array_of(model.effects.names());
   if (const std::string note = mesh_corrections_note(model.spec); !note.empty()) {
     j["mesh_corrections"] = note;
+  }
+  if (Json weights = particle_weights_json(model); weights.is_object()) {
+    j["particle_weights"] = std::move(weights);
   }
   fmt::print("{}", j.dump());
   return 0;

@@ -35,7 +35,41 @@ void failure_sections(const Scene& scene, const RunOutcome& out, Json& j) {
   }
 }
 
+/// How the arms of a virtual-fibre point cloud were balanced; null where they were not.
+Json fibre_balance_json(const Model& model) {
+  Json fb;
+  if (model.fibre_arms.balance_passes > 0) {
+    fb["balanced_particles"] = model.fibre_arms.balanced;
+    fb["relative_residual"] = model.fibre_arms.balance_residual;
+    fb["arms_at_floor"] = model.fibre_arms.balance_floored;
+    fb["passes"] = model.fibre_arms.balance_passes;
+    fb["applied"] = model.fibre_arms.balance_applied;
+    if (const auto& r = model.fibre_arms.relaxed; r.applied) {
+      Json& rj = fb["relaxed_moduli"]; // discretisation/fibre_relaxation.cpp
+      rj["relaxed_particles"] = r.free;
+      rj["bulk_energy_released"] = r.bulk;
+      rj["shear_energy_released"] = r.shear;
+      rj["shear_fraction_range"] = Json::array_of(std::vector<double>{r.shear_low, r.shear_high});
+      rj["fractions_bounded"] = r.bounded;
+    }
+  }
+  return fb;
+}
+
 } // namespace
+
+Json particle_weights_json(const Model& model) {
+  const ParticleGradientWeights& w = model.particle_weights;
+  Json j;
+  if (w.seconds > 0) {
+    j["matched"] = w.matched;
+    j["moments_only"] = w.moments_only;
+    j["unmatched"] = w.unmatched;
+    j["largest_residual"] = w.residual;
+    j["seconds"] = w.seconds;
+  }
+  return j;
+}
 
 Json run_summary(const Scene& scene, const Simulation& sim, const RunOutcome& out,
                  const RunOptions& options) {
@@ -108,21 +142,11 @@ Json run_summary(const Scene& scene, const Simulation& sim, const RunOutcome& ou
   if (Json details = sim.integrator().summary(); details.is_object()) {
     j["integrator_details"] = std::move(details);
   }
-  if (model.fibre_arms.balance_passes > 0) {
-    Json& fb = j["fibre_balance"]; // fibre_arms.hpp: point clouds' arms balanced
-    fb["balanced_particles"] = model.fibre_arms.balanced;
-    fb["relative_residual"] = model.fibre_arms.balance_residual;
-    fb["arms_at_floor"] = model.fibre_arms.balance_floored;
-    fb["passes"] = model.fibre_arms.balance_passes;
-    fb["applied"] = model.fibre_arms.balance_applied;
-    if (const auto& r = model.fibre_arms.relaxed; r.applied) {
-      Json& rj = fb["relaxed_moduli"]; // discretisation/fibre_relaxation.cpp
-      rj["relaxed_particles"] = r.free;
-      rj["bulk_energy_released"] = r.bulk;
-      rj["shear_energy_released"] = r.shear;
-      rj["shear_fraction_range"] = Json::array_of(std::vector<double>{r.shear_low, r.shear_high});
-      rj["fractions_bounded"] = r.bounded;
-    }
+  if (Json balance = fibre_balance_json(model); balance.is_object()) {
+    j["fibre_balance"] = std::move(balance); // fibre_arms.hpp: point clouds' arms balanced
+  }
+  if (Json weights = particle_weights_json(model); weights.is_object()) {
+    j["particle_weights"] = std::move(weights);
   }
   if (!scene.model.cracks.empty()) {
     Json& cj = j["cracks"]; // pairs of particles a crack kept from bonding

@@ -643,16 +643,25 @@ void scale_by_axis_factors(const ParticleSet& particles, const BondFamily& famil
 
 std::vector<double> bond_correction_factors(const CorrectionSpec& spec,
                                             const ParticleSet& particles, const BondFamily& family,
-                                            std::size_t body_count) {
+                                            std::size_t body_count,
+                                            ParticleGradientWeights* solved) {
   const std::size_t n = particles.size();
   const int dim = spec.dimension.dim;
   // `gradient` on an unstructured set: each particle's own weights, then the `tensor` axis
   // factors, which restore the uniaxial energies the mean of a pair's two ends' weights moves.
   const bool per_particle =
       spec.unstructured && spec.volume_correction == VolumeCorrection::gradient;
-  std::vector<double> factor =
-      per_particle ? particle_gradient_weights(spec, particles, family, body_count).factor
-                   : volume_correction_factors(spec, particles, family);
+  std::vector<double> factor;
+  if (per_particle) {
+    ParticleGradientWeights weights =
+        particle_gradient_weights(spec, particles, family, body_count);
+    factor = std::move(weights.factor);
+    if (solved != nullptr) {
+      *solved = std::move(weights);
+    }
+  } else {
+    factor = volume_correction_factors(spec, particles, family);
+  }
   const auto tensor_along = [dim](const Vec3& xi, double inv, const std::array<double, 3>& mean) {
     double phi = 0; // n·G·n with the mean diagonal tensor
     for (std::size_t d = 0; d < static_cast<std::size_t>(dim); ++d) {

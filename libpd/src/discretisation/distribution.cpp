@@ -209,6 +209,7 @@ Model localise(const Model& global, const std::vector<std::int32_t>& owner, int 
   l.spec = global.spec;
   l.effects = global.effects;
   l.bonds_cut_by_crack = global.bonds_cut_by_crack;
+  l.particle_weights = global.particle_weights;
   l.particles.position = subset(global.particles.position, kept);
   l.particles.volume = subset(global.particles.volume, kept);
   l.particles.material = subset(global.particles.material, kept);

@@ -5,6 +5,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <map>
@@ -653,6 +654,7 @@ ParticleGradientWeights particle_gradient_weights(const CorrectionSpec& spec,
   // closest_to_uniform_by_dual), then a pair's weight is the mean of its two ends'; a bond into a
   // ghost (no equations of its own) takes its body particle's. Particles are independent, so the
   // loop is parallel and its result does not depend on the thread count.
+  const auto start = std::chrono::steady_clock::now();
   const std::size_t bonds = family.directed_bond_count();
   std::vector<double> own(bonds, 1.0);
   std::vector<int> outcome(body_count, 0); // 2 everything, 1 moments only, 0 neither
@@ -716,6 +718,7 @@ ParticleGradientWeights particle_gradient_weights(const CorrectionSpec& spec,
     out.unmatched += outcome[i] == 0;
     out.residual = std::max(out.residual, residual[i]);
   }
+  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return out;
 }
 

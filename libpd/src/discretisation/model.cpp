@@ -653,8 +653,8 @@ Model build_model(const ModelSpec& spec, ParticleSet particles) {
     m.field.critical_stretch = k.critical_stretch;
     m.field.yield_stretch = k.yield_stretch;
   } else {
-    std::vector<double> correction =
-        bond_correction_factors(spec.corrections(), m.particles, m.family, body_count);
+    std::vector<double> correction = bond_correction_factors(
+        spec.corrections(), m.particles, m.family, body_count, &m.particle_weights);
     if (consistent_mirror_coupling(spec.mirror_coupling, m.constraints) ||
         !m.extrapolated.empty()) {
       // The energy W_c of mirror_constraints.hpp and ghost_layers.hpp: bonds between a body

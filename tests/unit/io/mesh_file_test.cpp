@@ -669,6 +669,12 @@ TEST_F(MeshFile, PerParticleGradientWeightsOnLatticeCellsAreTheLatticeWeights) {
   // stiffness here, so they leave the family.
   ASSERT_GT(mesh.size(), cube.size());
   ASSERT_EQ(mesh.family.directed_bond_count(), cube.family.directed_bond_count());
+  // Every particle met the lattice's equations, as the report says; the lattice ran no such solve.
+  EXPECT_EQ(mesh.particle_weights.matched, mesh.body_particle_count());
+  EXPECT_EQ(mesh.particle_weights.moments_only + mesh.particle_weights.unmatched, 0U);
+  EXPECT_LT(mesh.particle_weights.residual, 1e-10);
+  EXPECT_GT(mesh.particle_weights.seconds, 0.0);
+  EXPECT_EQ(cube.particle_weights.seconds, 0.0);
   const auto energy = [](pd::Model m) {
     std::vector<double> y(3 * m.size());
     for (std::size_t i = 0; i < m.size(); ++i) {
@@ -699,6 +705,9 @@ TEST_F(MeshFile, UnstructuredTetrahedraStoreTheContinuumEnergyUnderUniformStrain
                                "bodies: [{name: part, material: steel, mesh: tets.msh}]\n"
                                "solver: {integrator: static}\n")));
   ASSERT_GT(model.ghost_count, 0U);
+  const pd::ParticleGradientWeights& solved = model.particle_weights;
+  EXPECT_EQ(solved.matched + solved.moments_only + solved.unmatched, model.body_particle_count());
+  EXPECT_GT(solved.matched, 0U);
   double volume = 0;
   for (std::size_t i = 0; i < model.size() - model.ghost_count; ++i) {
     volume += model.particles.volume[i];

@@ -17,6 +17,10 @@ namespace pd {
 /// The process's peak resident set size (VmHWM of /proc/self/status) in bytes; 0 if unknown.
 std::uint64_t peak_resident_bytes();
 
+/// What a mesh body's per-particle `gradient` solve met (Model::particle_weights), as summary.json
+/// and `pd info --json` write it; null where no such solve ran.
+Json particle_weights_json(const Model& model);
+
 Json run_summary(const Scene& scene, const Simulation& sim, const RunOutcome& out,
                  const RunOptions& options);
 

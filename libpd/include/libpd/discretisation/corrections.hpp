@@ -224,6 +224,7 @@ struct ParticleGradientWeights {
   std::size_t moments_only = 0; ///< ... whose 4th and 3rd moments only were met
   std::size_t unmatched = 0;    ///< ... whose moments could not be met: their weights stay 1
   double residual = 0;          ///< largest relative residual of the equations that were met
+  double seconds = 0;           ///< wall time of the solve
 };
 ParticleGradientWeights particle_gradient_weights(const CorrectionSpec& spec,
                                                   const ParticleSet& particles,
@@ -277,8 +278,11 @@ double fracture_energy_weight_ratio(const CorrectionSpec& spec);
 /// order. All ones when both corrections are `none`.
 /// Particles from `body_count` on are ghosts (ghost_layers.hpp): per-particle factors are the body
 /// particles' own, and a bond between a body particle and a ghost takes the body particle's.
+/// `solved`, where given, receives what the per-particle `gradient` solve of an unstructured set
+/// met (its counts, residual and time; `factor` left empty); untouched otherwise.
 std::vector<double> bond_correction_factors(const CorrectionSpec& spec,
                                             const ParticleSet& particles, const BondFamily& family,
-                                            std::size_t body_count = static_cast<std::size_t>(-1));
+                                            std::size_t body_count = static_cast<std::size_t>(-1),
+                                            ParticleGradientWeights* solved = nullptr);
 
 } // namespace pd
