@@ -44,13 +44,12 @@ void print_table(const std::string& scene_path, const Model& model, const Resour
   if (const std::string note = mesh_corrections_note(model.spec); !note.empty()) {
     fmt::print("corrections        {}\n", note);
   }
-  if (const ParticleGradientWeights& w = model.particle_weights; w.seconds > 0) {
+  if (const ParticleGradientWeights& w = model.particle_weights; w.particles() > 0) {
     // What a mesh body's per-particle `gradient` solve met: a particle that keeps the moments
     // only stores more energy under a strain gradient (bending) than one that matched.
     fmt::print("gradient weights   {} of {} particles matched, {} moments only, {} neither "
                "({:.3g} s)\n",
-               w.matched, w.matched + w.moments_only + w.unmatched, w.moments_only, w.unmatched,
-               w.seconds);
+               w.matched, w.particles(), w.moments_only, w.unmatched, w.seconds);
   }
 }
 

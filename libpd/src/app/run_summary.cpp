@@ -61,7 +61,7 @@ Json fibre_balance_json(const Model& model) {
 Json particle_weights_json(const Model& model) {
   const ParticleGradientWeights& w = model.particle_weights;
   Json j;
-  if (w.seconds > 0) {
+  if (w.particles() > 0) {
     j["matched"] = w.matched;
     j["moments_only"] = w.moments_only;
     j["unmatched"] = w.unmatched;

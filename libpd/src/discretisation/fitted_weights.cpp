@@ -1,6 +1,7 @@
 // `volume_correction: fitted`: per-pair bond weights that give every particle of an irregular set
 // the continuum's moments over its own neighbourhood (declared in corrections.hpp).
 #include "libpd/discretisation/corrections.hpp"
+#include "moment_components.hpp"
 
 #include <Eigen/Dense>
 #include <algorithm>
@@ -60,16 +61,11 @@ struct Components {
 
 Components components(int dim) {
   Components c;
-  const auto n = static_cast<std::size_t>(dim);
-  for (std::size_t a = 0; a < n; ++a) {
-    for (std::size_t b = a; b < n; ++b) {
-      for (std::size_t d = b; d < n; ++d) {
-        c.third.push_back({a, b, d});
-        for (std::size_t e = d; e < n; ++e) {
-          c.fourth.push_back({a, b, d, e});
-        }
-      }
-    }
+  for (const auto& t : detail::symmetric_components(dim, 3)) {
+    c.third.push_back({t[0], t[1], t[2]});
+  }
+  for (const auto& t : detail::symmetric_components(dim, 4)) {
+    c.fourth.push_back({t[0], t[1], t[2], t[3]});
   }
   return c;
 }

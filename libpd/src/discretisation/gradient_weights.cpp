@@ -2,6 +2,7 @@
 // fourth moments and a cell's strain-gradient energy (declared in corrections.hpp; a file of its
 // own only to keep corrections.cpp within the layout's size limit).
 #include "libpd/discretisation/corrections.hpp"
+#include "moment_components.hpp"
 
 #include <Eigen/Dense>
 #include <algorithm>
@@ -516,24 +517,7 @@ struct MomentRow {
   double target = 0;
 };
 
-/// The symmetric components (index tuples a ≤ b ≤ ...) of an order-k tensor in `dim` dimensions.
-std::vector<std::array<std::size_t, 6>> symmetric_components(int dim, std::size_t order) {
-  std::vector<std::array<std::size_t, 6>> out;
-  std::array<std::size_t, 6> t{};
-  const auto n = static_cast<std::size_t>(dim);
-  const auto recurse = [&](auto&& self, std::size_t depth, std::size_t from) -> void {
-    if (depth == order) {
-      out.push_back(t);
-      return;
-    }
-    for (std::size_t a = from; a < n; ++a) {
-      t[depth] = a;
-      self(self, depth + 1, a);
-    }
-  };
-  recurse(recurse, 0, 0);
-  return out;
-}
+using detail::symmetric_components;
 
 double moment_term(const MomentRow& row, const Vec3& n, double len) {
   double value = std::pow(len, row.power);

@@ -225,6 +225,9 @@ struct ParticleGradientWeights {
   std::size_t unmatched = 0;    ///< ... whose moments could not be met: their weights stay 1
   double residual = 0;          ///< largest relative residual of the equations that were met
   double seconds = 0;           ///< wall time of the solve
+
+  /// The body particles the solve ran on: none where it did not run.
+  std::size_t particles() const { return matched + moments_only + unmatched; }
 };
 ParticleGradientWeights particle_gradient_weights(const CorrectionSpec& spec,
                                                   const ParticleSet& particles,

@@ -205,7 +205,7 @@ struct Model {
   /// Per crack of spec.cracks: the bonds (pairs) it kept from being created.
   std::vector<std::size_t> bonds_cut_by_crack;
   /// What the per-particle `gradient` weights of an unstructured set met (mesh bodies;
-  /// corrections.hpp), its `factor` empty; all zero where no such solve ran.
+  /// corrections.hpp), its `factor` empty; no particles() where no such solve ran.
   ParticleGradientWeights particle_weights;
   /// The particles this process owns when the run is split over MPI ranks (ownership.hpp);
   /// a serial model owns all of them.
